@@ -1,0 +1,155 @@
+"""``iwanfe joint``: properties of one four-parameter Iwan joint.
+
+Prints the density parameters (R, phi_max, S), the micro-slip coefficients kappa1,
+kappa2 (exact and as printed in the paper), and for each slip amplitude the exact
+first-harmonic stiffnesses, the dissipation per cycle and the in-phase stiffness the
+paper's kappa2 would give (micro-slip only).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from cases.jsonio import print_json
+from joints.iwan import (
+    IwanParameters,
+    backbone,
+    describing_function,
+    dissipation_per_cycle,
+    kappa1,
+    kappa2_exact,
+    kappa2_paper,
+    steady_loop,
+)
+
+NAME = "joint"
+DEFAULT_FRACTIONS = (0.1, 0.5, 1.0, 2.0)
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        NAME,
+        help="stiffness, damping and dissipation of a four-parameter Iwan joint",
+        description=(
+            "Exact properties of a four-parameter Iwan joint (Segalman 2005): density "
+            "parameters R, phi_max, S; for each slip amplitude A the first-harmonic "
+            "in-phase and quadrature stiffnesses (dissipation per cycle = pi A^2 "
+            "k_quadrature) and the in-phase stiffness K_T - kappa2_paper A^(chi+1) of "
+            "the paper's approximate kappa2 (micro-slip only). Without --amplitude, "
+            "A = 0.1, 0.5, 1 and 2 phi_max."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    parser.add_argument("--chi", type=float, required=True,
+                        help="density exponent, in (-1, 0)")
+    parser.add_argument("--kt", type=float, required=True, help="joint stiffness K_T [N/m]")
+    parser.add_argument("--fs", type=float, required=True,
+                        help="macro-slip force F_S [N]")
+    parser.add_argument("--beta", type=float, required=True,
+                        help="Dirac-to-continuous stiffness ratio beta (>= 0)")
+    parser.add_argument("--amplitude", type=float, nargs="+", metavar="A", default=None,
+                        help="slip amplitudes [m]")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--plot", metavar="FILE.png", default=None,
+                        help="draw the backbone and the loops at the amplitudes")
+    parser.set_defaults(func=run)
+
+
+def joint_summary(p: IwanParameters, amplitudes) -> dict:
+    """Everything ``iwanfe joint`` reports, as plain numbers (SI units)."""
+    amplitudes = np.asarray(amplitudes, dtype=float)
+    bad = ~(np.isfinite(amplitudes) & (amplitudes > 0.0))
+    if bad.any():
+        raise ValueError(f"amplitude must be finite and > 0, got {amplitudes[bad][0]:g}")
+    k_in, k_q = describing_function(p, amplitudes)
+    k_in, k_q = np.atleast_1d(k_in), np.atleast_1d(k_q)
+    dissipation = np.atleast_1d(dissipation_per_cycle(p, amplitudes))
+    k2p = kappa2_paper(p.R, p.chi)
+    rows = []
+    for A, ki, kq, d in zip(amplitudes, k_in, k_q, dissipation):
+        micro = A < p.phi_max
+        rows.append({
+            "amplitude": float(A),
+            "regime": "micro" if micro else "macro",
+            "stiffness_in_phase": float(ki),
+            "stiffness_quadrature": float(kq),
+            "dissipation_per_cycle": float(d),
+            "stiffness_in_phase_paper_kappa2": (
+                float(p.K_T - k2p * A ** (p.chi + 1.0)) if micro else None),
+        })
+    return {
+        "chi": p.chi, "K_T": p.K_T, "F_S": p.F_S, "beta": p.beta,
+        "R": p.R, "phi_max": p.phi_max, "S": p.S,
+        "kappa1": kappa1(p.R, p.chi),
+        "kappa2_exact": kappa2_exact(p.R, p.chi),
+        "kappa2_paper": k2p,
+        "amplitudes": rows,
+    }
+
+
+def _table(summary: dict) -> str:
+    s = summary
+    e = s["chi"] + 2.0
+    lines = [
+        f"Iwan joint  chi = {s['chi']:g}, K_T = {s['K_T']:g} N/m, "
+        f"F_S = {s['F_S']:g} N, beta = {s['beta']:g}",
+        f"  R       = {s['R']:.6e} N/m^{e:g}",
+        f"  phi_max = {s['phi_max']:.6e} m",
+        f"  S       = {s['S']:.6e} N/m",
+        f"  kappa1  = {s['kappa1']:.6e} N/m^{e:g}   (paper A15, exact)",
+        f"  kappa2  = {s['kappa2_exact']:.6e} N/m^{e:g}   (exact)",
+        f"  kappa2  = {s['kappa2_paper']:.6e} N/m^{e:g}   (paper A12-A15, "
+        f"{100.0 * (s['kappa2_paper'] / s['kappa2_exact'] - 1.0):+.2f} %)",
+        "",
+        f"  {'A [m]':>11}  {'regime':6}  {'k_in_phase':>12}  {'k_quadrature':>12}  "
+        f"{'D/cycle [J]':>11}  {'k_in (paper)':>12}",
+    ]
+    for r in s["amplitudes"]:
+        paper = r["stiffness_in_phase_paper_kappa2"]
+        paper = f"{paper:12.6e}" if paper is not None else f"{'n/a':>12}"
+        lines.append(
+            f"  {r['amplitude']:11.4e}  {r['regime']:6}  {r['stiffness_in_phase']:12.6e}  "
+            f"{r['stiffness_quadrature']:12.6e}  {r['dissipation_per_cycle']:11.4e}  {paper}")
+    lines.append("  stiffnesses in N/m; k_in (paper) = K_T - kappa2_paper A^(chi+1), "
+                 "micro-slip only")
+    return "\n".join(lines)
+
+
+def _plot(p: IwanParameters, amplitudes, path: str) -> None:
+    from viz.hysteresis import plot_hysteresis
+
+    a_max = max(float(np.max(amplitudes)), p.phi_max) * 1.1
+    u = np.linspace(-a_max, a_max, 801)
+    loops, labels = [], []
+    for A in amplitudes:
+        _, ul, fl = steady_loop(p, A, 721)
+        loops.append((ul, fl))
+        labels.append(f"A = {A:.3g} m ({'micro' if A < p.phi_max else 'macro'})")
+    plot_hysteresis(u, backbone(p, u), loops, labels, slip_limit=p.phi_max,
+                    title=f"Iwan joint: chi={p.chi:g}, K_T={p.K_T:g} N/m, "
+                          f"F_S={p.F_S:g} N, beta={p.beta:g}",
+                    path=path)
+
+
+def run(args) -> int:
+    for name, value in (("chi", args.chi), ("kt", args.kt), ("fs", args.fs),
+                        ("beta", args.beta)):
+        if not math.isfinite(value):
+            raise ValueError(f"--{name} must be finite, got {value}")
+    p = IwanParameters(chi=args.chi, K_T=args.kt, F_S=args.fs, beta=args.beta)
+    if args.amplitude:
+        amplitudes = np.asarray(args.amplitude, dtype=float)
+    else:
+        amplitudes = np.asarray(DEFAULT_FRACTIONS) * p.phi_max
+    summary = joint_summary(p, amplitudes)
+    if args.plot:
+        _plot(p, amplitudes, args.plot)
+    if args.json:
+        print_json(summary)
+    else:
+        print(_table(summary))
+        if args.plot:
+            print(f"  plot written to {args.plot}")
+    return 0
