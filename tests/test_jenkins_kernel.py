@@ -1,0 +1,239 @@
+"""Compiled Jenkins-bank kernel (joints/jenkins.py) against a plain numpy update written
+here from the definition: bitwise equal results for random shapes, broadcasting of the
+parameters, the stuck rule, non-finite inputs, in-place commits and calls from
+compiled code; the sums also against exactly rounded sums (math.fsum)."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numba import njit
+
+from joints.iwan import IwanParameters
+from joints.jenkins import (
+    bank_update_kernel,
+    discretize,
+    jenkins_update,
+    jenkins_update_into,
+)
+
+# pairwise-summation boundaries of numpy (blocks of 8 lanes, 128-term leaves, halving)
+LENGTHS = [1, 2, 7, 8, 9, 15, 16, 17, 100, 127, 128, 129, 136, 255, 256, 257, 1000, 1031,
+           4099]
+
+
+def numpy_update(slip, anchor, k, phi):
+    """The update by definition, in plain numpy (independent of the module)."""
+    col = np.asarray(slip, float)[:, None]
+    new = np.minimum(np.maximum(anchor, col - phi), col + phi)
+    k_full = np.broadcast_to(k, new.shape)
+    force = np.sum(np.ascontiguousarray((col - new) * k_full), axis=1)
+    tangent = np.sum(np.ascontiguousarray(np.where(new == anchor, k_full, 0.0)), axis=1)
+    return force, tangent, new
+
+
+def bits(a):
+    return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+def assert_bitwise(got, ref):
+    for g, r in zip(got, ref):
+        assert g.shape == r.shape
+        np.testing.assert_array_equal(bits(g), bits(r))
+
+
+def random_bank(rng, n_joints, n_sliders, per_joint_k, per_joint_phi):
+    scale = 10.0 ** rng.uniform(-7, -3)
+    k_shape = (n_joints, n_sliders) if per_joint_k else (n_sliders,)
+    phi_shape = (n_joints, n_sliders) if per_joint_phi else (n_sliders,)
+    k = rng.uniform(0.0, 1.0, k_shape) * 10.0 ** rng.uniform(2, 8)
+    phi = np.sort(rng.uniform(0.0, scale, phi_shape), axis=-1)
+    anchor = rng.normal(0.0, scale, (n_joints, n_sliders))
+    slip = rng.normal(0.0, 2 * scale, n_joints)
+    return slip, anchor, k, phi
+
+
+@pytest.mark.parametrize("n_sliders", LENGTHS)
+def test_bitwise_equal_across_pairwise_boundaries(n_sliders):
+    rng = np.random.default_rng(n_sliders)
+    for n_joints, pk, pp in ((1, False, False), (3, True, False), (5, False, True),
+                             (2, True, True)):
+        slip, anchor, k, phi = random_bank(rng, n_joints, n_sliders, pk, pp)
+        before = anchor.copy()
+        got = jenkins_update(slip, anchor, k, phi)
+        assert_bitwise(got, numpy_update(slip, anchor, k, phi))
+        np.testing.assert_array_equal(anchor, before)  # pure
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 7), st.integers(1, 400), st.booleans(), st.booleans(),
+       st.integers(0, 2**32 - 1))
+def test_bitwise_equal_random_shapes(n_joints, n_sliders, pk, pp, seed):
+    rng = np.random.default_rng(seed)
+    slip, anchor, k, phi = random_bank(rng, n_joints, n_sliders, pk, pp)
+    assert_bitwise(jenkins_update(slip, anchor, k, phi), numpy_update(slip, anchor, k, phi))
+
+
+def test_sums_against_exactly_rounded_sums():
+    """Independent of summation order: |force - fsum| <= (n-1) eps sum|terms| (Higham
+    2002, eq. 4.6 bound for any order), tangent likewise."""
+    rng = np.random.default_rng(5)
+    eps = np.finfo(float).eps
+    for n in (9, 130, 3000):
+        slip, anchor, k, phi = random_bank(rng, 4, n, True, True)
+        F, T, new = jenkins_update(slip, anchor, k, phi)
+        for j in range(4):
+            terms = (slip[j] - new[j]) * k[j]
+            stuck_k = np.where(new[j] == anchor[j], k[j], 0.0)
+            bound = (n - 1) * eps * np.abs(terms).sum()
+            assert abs(F[j] - math.fsum(terms)) <= bound
+            assert abs(T[j] - math.fsum(stuck_k)) <= (n - 1) * eps * stuck_k.sum()
+
+
+def test_parameter_broadcasting_gives_identical_numbers():
+    rng = np.random.default_rng(11)
+    slip, anchor, k, phi = random_bank(rng, 6, 333, False, False)
+    ref = jenkins_update(slip, anchor, k, phi)
+    for kk, pp in ((np.tile(k, (6, 1)), phi), (k, np.tile(phi, (6, 1))),
+                   (k[None, :], phi[None, :]), (np.tile(k, (6, 1)), np.tile(phi, (6, 1)))):
+        assert_bitwise(jenkins_update(slip, anchor, kk, pp), ref)
+
+
+def test_stuck_means_anchor_unchanged_and_full_tangent():
+    """Anchors within the limits: every slider sticks, anchor_new is anchor bit for bit
+    and the tangent is the sum of all stiffnesses; sliders pushed beyond their limit
+    end exactly at the limit and leave the tangent."""
+    p = IwanParameters(chi=-0.5, K_T=1.1e5, F_S=400.0, beta=4.0)
+    d = discretize(p, 200)
+    rng = np.random.default_rng(2)
+    slip = rng.normal(0.0, p.phi_max, 3)
+    anchor = slip[:, None] + rng.uniform(-0.999, 0.999, (3, 200)) * d.slip_limit
+    F, T, new = jenkins_update(slip, anchor, d.stiffness, d.slip_limit)
+    np.testing.assert_array_equal(bits(new), bits(anchor))
+    assert np.all(T == np.sum(np.tile(d.stiffness, (3, 1)), axis=1))
+    assert T[0] == pytest.approx(p.K_T, rel=1e-13)
+    # move the slip by twice the largest limit: every slider slips to its limit
+    s2 = slip + 2.0 * p.phi_max
+    F2, T2, new2 = jenkins_update(s2, anchor, d.stiffness, d.slip_limit)
+    np.testing.assert_array_equal(new2, s2[:, None] - d.slip_limit)
+    assert np.all(T2 == 0.0)
+    # saturated force: sum k phi (within rounding of the pairwise sum)
+    np.testing.assert_allclose(F2, np.dot(d.stiffness, d.slip_limit), rtol=1e-13)
+
+
+def test_initial_state_signed_zeros_and_ties():
+    """Zero slip on zero anchors (the virgin state) and anchors exactly on a limit:
+    numpy's tie rule and signed zeros reproduced bit for bit."""
+    n = 37
+    k = np.linspace(1.0, 2.0, n)
+    phi = np.linspace(0.5, 1.5, n)
+    for slip in (np.array([0.0, -0.0]), np.array([1.0, -1.0])):
+        for anchor in (np.zeros((2, n)), -np.zeros((2, n)),
+                       slip[:, None] - phi, slip[:, None] + phi):
+            assert_bitwise(jenkins_update(slip, anchor, k, phi),
+                           numpy_update(slip, anchor, k, phi))
+
+
+def test_non_finite_inputs_follow_numpy():
+    rng = np.random.default_rng(9)
+    n = 45
+    k = rng.uniform(1, 2, n)
+    phi = np.sort(rng.uniform(0.1, 1.0, n))
+    phi_inf = phi.copy()
+    phi_inf[-3:] = np.inf                       # sliders that never slip
+    slip = np.array([np.nan, np.inf, -np.inf, 0.3, 0.2])
+    anchor = rng.normal(0, 1, (5, n))
+    anchor[3, ::4] = np.nan                     # a poisoned state
+    anchor[4, ::5] = np.inf
+    for ph in (phi, phi_inf):
+        got = jenkins_update(slip, anchor, k, ph)
+        with np.errstate(invalid="ignore"):
+            ref = numpy_update(slip, anchor, k, ph)
+        for g, r in zip(got, ref):
+            np.testing.assert_array_equal(g, r)  # NaN where numpy has NaN
+    assert np.isnan(got[0][0]) and np.all(np.isnan(got[2][0]))
+
+
+def test_into_matches_pure_and_commits_in_place():
+    rng = np.random.default_rng(4)
+    slip, anchor, k, phi = random_bank(rng, 4, 300, True, False)
+    F, T, new = jenkins_update(slip, anchor, k, phi)
+    out = np.empty_like(anchor)
+    F2, T2 = jenkins_update_into(slip, anchor, k, phi, out)
+    assert_bitwise((F2, T2, out), (F, T, new))
+    state = anchor.copy()
+    fo, to = np.empty(4), np.empty(4)
+    r = jenkins_update_into(slip, state, k, phi, state, fo, to)
+    assert r[0] is fo and r[1] is to
+    assert_bitwise((fo, to, state), (F, T, new))
+
+
+def test_into_rejects_bad_outputs():
+    slip, anchor, k, phi = random_bank(np.random.default_rng(0), 2, 10, False, False)
+    with pytest.raises(ValueError, match="out_anchor"):
+        jenkins_update_into(slip, anchor, k, phi, np.empty((2, 9)))
+    with pytest.raises(ValueError, match="out_anchor"):
+        jenkins_update_into(slip, anchor, k, phi, np.empty((10, 2)).T)
+    with pytest.raises(ValueError, match="out_force"):
+        jenkins_update_into(slip, anchor, k, phi, np.empty((2, 10)), np.empty(3))
+
+
+def test_non_contiguous_and_other_dtypes():
+    rng = np.random.default_rng(8)
+    slip, anchor, k, phi = random_bank(rng, 3, 50, True, True)
+    ref = jenkins_update(slip, anchor, k, phi)
+    phi_strided = np.repeat(phi, 2, axis=1)[:, ::2]
+    assert not phi_strided.flags.c_contiguous
+    got = jenkins_update(list(slip), np.asfortranarray(anchor), np.asfortranarray(k),
+                         phi_strided)
+    assert_bitwise(got, ref)
+    wide = np.zeros((3, 100))
+    wide[:, ::2] = anchor                      # strided view
+    assert_bitwise(jenkins_update(slip, wide[:, ::2], k, phi), ref)
+    got32 = jenkins_update(slip.astype(np.float32), anchor.astype(np.float32), k, phi)
+    assert_bitwise(got32, numpy_update(slip.astype(np.float32).astype(float),
+                                       anchor.astype(np.float32).astype(float), k, phi))
+
+
+def test_broadcast_shapes_outside_the_contract_use_numpy_broadcasting():
+    rng = np.random.default_rng(3)
+    k = rng.uniform(1, 2, 20)
+    phi = rng.uniform(0.1, 1, 20)
+    anchor = rng.normal(0, 1, (1, 20))     # one state row shared by three slips
+    slip = np.array([0.1, -0.4, 2.0])
+    F, T, new = jenkins_update(slip, anchor, k, phi)
+    assert new.shape == (3, 20)
+    for j in range(3):
+        Fj, Tj, nj = jenkins_update(slip[j:j + 1], anchor, k, phi)
+        assert_bitwise((F[j:j + 1], T[j:j + 1], new[j:j + 1]), (Fj, Tj, nj))
+
+
+@njit
+def _march(slips, anchor, k, phi):
+    n_steps, n_joints = slips.shape
+    force = np.empty((n_steps, n_joints))
+    tangent = np.empty((n_steps, n_joints))
+    for t in range(n_steps):
+        bank_update_kernel(slips[t], anchor, k, phi, anchor, force[t], tangent[t])
+    return force, tangent
+
+
+def test_kernel_called_from_compiled_loop_matches_python_loop():
+    p = IwanParameters(chi=-0.6, K_T=8e5, F_S=150.0, beta=2.0)
+    d = discretize(p, 150)
+    theta = np.linspace(0, 6 * np.pi, 301)
+    slips = np.sin(theta)[:, None] * np.array([0.4, 1.3]) * p.phi_max
+    anchor = np.zeros((2, 150))
+    F_py, T_py = [], []
+    for s in slips:
+        F, T, anchor = jenkins_update(s, anchor, d.stiffness, d.slip_limit)
+        F_py.append(F)
+        T_py.append(T)
+    state = np.zeros((2, 150))
+    F_c, T_c = _march(slips, state, d.stiffness[None, :], d.slip_limit[None, :])
+    assert_bitwise((F_c, T_c, state), (np.array(F_py), np.array(T_py), anchor))
+    # the joint driven beyond phi_max saturates (zero tangent) at its turning points,
+    # where its force is +-sum k phi = +-F_S (midpoint rule, within 1e-4 at n = 150)
+    assert T_c[:, 1].min() == 0.0 and T_c[:, 0].min() > 0.0
+    assert np.abs(F_c[:, 1]).max() == pytest.approx(p.F_S, rel=1e-4)
