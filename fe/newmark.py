@@ -1,0 +1,374 @@
+"""Newmark / HHT-alpha time integration of a reduced jointed structure.
+
+Equation of motion in the reduced basis (:mod:`fe.reduction`, paper eq. 23-25)::
+
+    M q'' + C q' + K_J q + G^T g(s) = p(t),   s = G q,   g(s) = F(s) - K_T s,
+
+where ``F`` is the Jenkins-bank force of each joint (:mod:`joints.jenkins`) and
+``K_J`` already holds the stuck stiffness ``K_T``; ``g`` is the slip-induced force.
+
+Scheme: HHT-alpha (Hilber, Hughes, Taylor 1977) with ``alpha`` in [-1/3, 0],
+``beta = (1 - alpha)^2/4``, ``gamma = 1/2 - alpha``; ``alpha = 0`` is the Newmark
+average-acceleration rule (Newmark 1959, paper ref. 18), unconditionally stable and
+non-dissipative. The balance at ``t_{n+1}``::
+
+    M a1 + (1+alpha)(C v1 + K q1 + G^T g1) - alpha (C v0 + K q0 + G^T g0)
+        = (1+alpha) p1 - alpha p0
+
+is linear in ``a1`` except for ``g1 = g(G q1)``. Writing
+``a1 = a_lin - (1+alpha) S^{-1} G^T g1`` with ``S = M + (1+alpha)(gamma dt C + beta
+dt^2 K)`` reduces each step to ``n_joints`` nonlinear equations in the slips::
+
+    h(s) = s - s_lin + (1+alpha) beta dt^2 Z g(s) = 0,   Z = G S^{-1} G^T,
+
+solved by Newton with the consistent tangent ``dg/ds = k_t - K_T`` from the return
+mapping. The joints' slider states are committed once the step has converged.
+
+Energy balance (reported by :func:`integrate`): with ``Dq = q1 - q0``,
+``input = sum Dq . (p0 + p1)/2``, ``viscous = sum Dq . C (v0 + v1)/2``,
+``joint dissipation = sum_i k_i phi_i |D x_i|`` (friction work of the sliders),
+kinetic ``v.M v/2``, structural strain energy ``q.K_J q/2 - sum K_T s^2/2`` and joint
+stored energy ``sum_i k_i (s - x_i)^2/2``. For ``alpha = 0`` the scheme conserves this
+balance exactly except for the trapezoidal joint work over a step in which a slider
+starts to slip (``O(dt^2)``); ``alpha < 0`` adds numerical dissipation, which then
+shows in the residual. SI units: s, m, N, J.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from fe.reduction import JointBank, ReducedModel
+from joints.jenkins import jenkins_update
+
+__all__ = ["NewmarkSettings", "NewmarkState", "EnergyBalance", "NewmarkRun", "integrate"]
+
+
+@dataclass(frozen=True)
+class NewmarkSettings:
+    """Time step ``dt`` (s), HHT ``alpha`` in [-1/3, 0], Newton tolerance on the slip
+    residual (relative to the slip scale, dimensionless) and iteration cap."""
+
+    dt: float
+    alpha: float = 0.0
+    tol: float = 1e-12
+    max_iter: int = 40
+
+    def __post_init__(self):
+        if not self.dt > 0:
+            raise ValueError(f"time step dt must be > 0, got {self.dt!r}")
+        if not -1.0 / 3.0 <= self.alpha <= 0.0:
+            raise ValueError(f"HHT alpha must lie in [-1/3, 0], got {self.alpha!r}")
+
+    @property
+    def beta(self) -> float:
+        return 0.25 * (1.0 - self.alpha) ** 2
+
+    @property
+    def gamma(self) -> float:
+        return 0.5 - self.alpha
+
+
+@dataclass
+class NewmarkState:
+    """Committed state at time ``t``: reduced displacement ``q`` (m), velocity ``v``,
+    acceleration ``a``, slider anchors (m, shape (n_joints, n_sliders)), slip-induced
+    joint force ``g`` (N) and the scalar excitation value ``e`` at ``t``."""
+
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    anchor: np.ndarray
+    g: np.ndarray
+    e: float = 0.0
+
+    @classmethod
+    def rest(cls, model: ReducedModel, bank: JointBank, t: float = 0.0) -> "NewmarkState":
+        """Structure at rest, joints virgin."""
+        r = model.n_reduced
+        return cls(t=t, q=np.zeros(r), v=np.zeros(r), a=np.zeros(r),
+                   anchor=bank.initial_anchor(), g=np.zeros(bank.n_joints), e=0.0)
+
+    def copy(self) -> "NewmarkState":
+        return NewmarkState(self.t, self.q.copy(), self.v.copy(), self.a.copy(),
+                            self.anchor.copy(), self.g.copy(), self.e)
+
+
+@dataclass
+class EnergyBalance:
+    """Energies over a run (J). ``residual = input - (viscous + joint_dissipation +
+    kinetic + strain + joint_stored)`` where the last three are changes."""
+
+    input: float = 0.0
+    viscous: float = 0.0
+    joint_dissipation: float = 0.0
+    kinetic: float = 0.0
+    strain: float = 0.0
+    joint_stored: float = 0.0
+
+    @property
+    def residual(self) -> float:
+        return self.input - (self.viscous + self.joint_dissipation + self.kinetic
+                             + self.strain + self.joint_stored)
+
+    @property
+    def relative_residual(self) -> float:
+        """``|residual| / max(|input|, sum of |terms|)``."""
+        scale = max(abs(self.input), abs(self.viscous) + abs(self.joint_dissipation)
+                    + abs(self.kinetic) + abs(self.strain) + abs(self.joint_stored))
+        return abs(self.residual) / scale if scale > 0 else 0.0
+
+
+@dataclass
+class NewmarkRun:
+    """Result of :func:`integrate`: times ``t`` (n_steps+1,), reduced displacements
+    ``q`` and velocities ``v`` (n_steps+1, r), slips (n_steps+1, n_joints), the final
+    state, the energy balance and the total number of Newton iterations."""
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    slip: np.ndarray
+    state: NewmarkState
+    energy: EnergyBalance
+    newton_iterations: int = 0
+    joint_force: np.ndarray = field(default=None)
+
+
+def _energies(model: ReducedModel, bank: JointBank, q, v, anchor):
+    s = model.G @ q
+    kin = 0.5 * v @ (model.M @ v)
+    strain = 0.5 * q @ (model.K @ q) - 0.5 * np.sum(model.K_T * s * s)
+    return kin, strain, bank.stored_energy(s, anchor)
+
+
+def _reference_loop(st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, G, K_T,
+                    k_sl, phi_sl, tol, max_iter, slip_scale, record_force, fric):
+    """Python step loop over :func:`joints.jenkins.jenkins_update` (reference)."""
+    n_steps = e.size - 1
+    r = sl.size
+    nj = K_T.size
+    I_nj = np.eye(nj)
+    qh = np.empty((n_steps + 1, r))
+    vh = np.empty((n_steps + 1, r))
+    sh = np.empty((n_steps + 1, nj))
+    fh = np.empty((n_steps + 1, nj)) if record_force else None
+    qh[0], vh[0] = st.q, st.v
+    sh[0] = G @ st.q
+    if record_force:
+        fh[0] = st.g + K_T * sh[0]
+    x = np.concatenate([st.q, st.v, st.a])
+    g0 = np.asarray(st.g, dtype=float)
+    anchor = st.anchor
+    dissip = 0.0
+    iters = 0
+    for k in range(n_steps):
+        ee = (1.0 + al) * e[k + 1] - al * e[k]
+        a_lin = B @ x + sl * ee
+        s_lin = GP @ x + bdt2 * (GB @ x + Gsl * ee)
+        if al != 0.0:
+            a_lin = a_lin + al * (Y @ g0)
+            s_lin = s_lin + al * bdt2 * (Z @ g0)
+        s = s_lin - cz * (Z @ g0)             # start from the last joint force
+        for _ in range(max_iter):
+            F, kt, anc = jenkins_update(s, anchor, k_sl, phi_sl)
+            g = F - K_T * s
+            h = s - s_lin + cz * (Z @ g)
+            iters += 1
+            if np.max(np.abs(h)) <= tol * (np.max(np.abs(s)) + slip_scale):
+                break
+            J = I_nj + cz * Z * (kt - K_T)[None, :]
+            s = s - np.linalg.solve(J, h)
+        else:
+            raise RuntimeError(f"Newton did not converge at step {k} (|h| = {np.abs(h).max():.3e})")
+        dissip += float(np.sum(fric * np.abs(anc - anchor)))
+        anchor = anc
+        a1 = a_lin - (1.0 + al) * (Y @ g)
+        q1 = P @ x + bdt2 * a1
+        v1 = Vp @ x + ga_dt * a1
+        x = np.concatenate([q1, v1, a1])
+        g0 = g
+        qh[k + 1], vh[k + 1], sh[k + 1] = q1, v1, s
+        if record_force:
+            fh[k + 1] = F
+    return qh, vh, sh, fh, x, g0, anchor, dissip, iters
+
+
+@njit(cache=True)
+def _march(B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, e, x0, g0, anchor0,
+           k, phi, K_T, tol, max_iter, slip_scale):
+    """Compiled step loop of :func:`integrate` (same algebra as :func:`_reference_loop`,
+    the return mapping of :func:`joints.jenkins.jenkins_update` inlined)."""
+    n_steps = e.size - 1
+    r = sl.size
+    nj, ns = k.shape
+    qh = np.empty((n_steps + 1, r))
+    vh = np.empty((n_steps + 1, r))
+    sh = np.empty((n_steps + 1, nj))
+    x = x0.copy()
+    g_old = g0.copy()
+    anchor = anchor0.copy()
+    qh[0] = x[:r]
+    vh[0] = x[r:2 * r]
+    sh[0] = 0.0                      # filled by the caller
+    s = np.empty(nj)
+    g = np.empty(nj)
+    kt = np.empty(nj)
+    trial = np.empty((nj, ns))
+    dissip = 0.0
+    iters = 0
+    status = -1
+    for step in range(n_steps):
+        ee = (1.0 + al) * e[step + 1] - al * e[step]
+        a_lin = B @ x + sl * ee
+        s_lin = GP @ x + bdt2 * (GB @ x + Gsl * ee)
+        if al != 0.0:
+            a_lin = a_lin + al * (Y @ g_old)
+            s_lin = s_lin + al * bdt2 * (Z @ g_old)
+        s[:] = s_lin - cz * (Z @ g_old)
+        converged = False
+        for _ in range(max_iter):
+            iters += 1
+            for j in range(nj):
+                F = 0.0
+                kk = 0.0
+                sj = s[j]
+                for i in range(ns):
+                    xi = anchor[j, i]
+                    xn = xi
+                    lo = sj - phi[j, i]
+                    hi = sj + phi[j, i]
+                    if xn < lo:
+                        xn = lo
+                    if xn > hi:
+                        xn = hi
+                    trial[j, i] = xn
+                    F += k[j, i] * (sj - xn)
+                    if xn == xi:
+                        kk += k[j, i]
+                g[j] = F - K_T[j] * sj
+                kt[j] = kk
+            h = s - s_lin + cz * (Z @ g)
+            smax = 0.0
+            hmax = 0.0
+            for j in range(nj):
+                smax = max(smax, abs(s[j]))
+                hmax = max(hmax, abs(h[j]))
+            if hmax <= tol * (smax + slip_scale):
+                converged = True
+                break
+            J = np.eye(nj) + cz * Z * (kt - K_T).reshape(1, nj)
+            s -= np.linalg.solve(J, h)
+        if not converged:
+            status = step
+            break
+        for j in range(nj):
+            for i in range(ns):
+                dissip += k[j, i] * phi[j, i] * abs(trial[j, i] - anchor[j, i])
+                anchor[j, i] = trial[j, i]
+        a1 = a_lin - (1.0 + al) * (Y @ g)
+        q1 = P @ x + bdt2 * a1
+        v1 = Vp @ x + ga_dt * a1
+        x[:r] = q1
+        x[r:2 * r] = v1
+        x[2 * r:] = a1
+        g_old[:] = g
+        qh[step + 1] = q1
+        vh[step + 1] = v1
+        sh[step + 1] = s
+    return qh, vh, sh, x, g_old, anchor, dissip, iters, status
+
+
+def integrate(model: ReducedModel, bank: JointBank, load, excitation, settings: NewmarkSettings,
+              state: NewmarkState | None = None, record_force: bool = False,
+              compiled: bool = True) -> NewmarkRun:
+    """Integrate ``len(excitation) - 1`` steps of the HHT/Newmark scheme.
+
+    Parameters
+    ----------
+    model : ReducedModel
+    bank : JointBank
+        Joint banks; ``bank.K_T`` must equal ``model.K_T``.
+    load : ndarray, shape (r,)
+        Reduced load pattern ``Phi^T f`` (N).
+    excitation : ndarray, shape (n_steps + 1,)
+        Scalar multiplier of ``load`` at ``t0 + k dt``; ``excitation[0]`` must be the
+        value at the initial state's time.
+    settings : NewmarkSettings
+    state : NewmarkState, optional
+        Initial state (default: rest, virgin joints). Not modified.
+    record_force : bool
+        Also return the joint forces ``F`` (n_steps+1, n_joints) (reference loop).
+    compiled : bool
+        Compiled step loop (default) or the reference Python loop over
+        :func:`joints.jenkins.jenkins_update` (same algebra; for tests).
+
+    Returns
+    -------
+    NewmarkRun
+    """
+    if not np.allclose(bank.K_T, model.K_T, rtol=1e-9):
+        raise ValueError("joint bank stiffness does not match the model's K_T")
+    load = np.ascontiguousarray(load, dtype=float)
+    e = np.ascontiguousarray(excitation, dtype=float)
+    n_steps = e.size - 1
+    if n_steps < 1:
+        raise ValueError("need at least two excitation samples")
+    st = NewmarkState.rest(model, bank) if state is None else state.copy()
+    dt, al = settings.dt, settings.alpha
+    be, ga = settings.beta, settings.gamma
+    M, C, K, G, K_T = model.M, model.C, model.K, model.G, model.K_T
+    r = model.n_reduced
+    S = M + (1.0 + al) * (ga * dt * C + be * dt * dt * K)
+    Sinv = np.linalg.inv(S)
+    Y = Sinv @ G.T                                        # (r, nj)
+    Z = G @ Y                                             # (nj, nj)
+    cz = (1.0 + al) * be * dt * dt
+    # a_lin = B @ [q; v; a] + Sinv load ((1+al) e1 - al e0) + al Y g0
+    A_q = -K
+    A_v = -C - (1.0 + al) * dt * K
+    A_a = -(1.0 + al) * (dt * (1.0 - ga) * C + dt * dt * (0.5 - be) * K)
+    B = np.ascontiguousarray(Sinv @ np.hstack([A_q, A_v, A_a]))     # (r, 3r)
+    sl = Sinv @ load
+    eye = np.eye(r)
+    P = np.hstack([eye, dt * eye, dt * dt * (0.5 - be) * eye])      # q~ = P x
+    Vp = np.hstack([np.zeros((r, r)), eye, dt * (1.0 - ga) * eye])  # v~ = Vp x
+    GP, GB, Gsl = G @ P, G @ B, G @ sl
+    k_sl, phi_sl = bank.stiffness, bank.slip_limit
+    kin0, strain0, stored0 = _energies(model, bank, st.q, st.v, st.anchor)
+    slip_scale = float(np.min(phi_sl)) * 1e-3
+    bdt2, ga_dt = be * dt * dt, ga * dt
+    if compiled and not record_force:
+        x0 = np.concatenate([st.q, st.v, st.a])
+        qh, vh, sh, x, g_end, anchor, dissip, iters, status = _march(
+            B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, e, x0,
+            np.asarray(st.g, dtype=float), np.ascontiguousarray(st.anchor), k_sl, phi_sl,
+            K_T, settings.tol, settings.max_iter, slip_scale)
+        if status >= 0:
+            raise RuntimeError(f"Newton did not converge at step {status}")
+        sh[0] = G @ st.q
+        fh = None
+    else:
+        qh, vh, sh, fh, x, g_end, anchor, dissip, iters = _reference_loop(
+            st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, G, K_T, k_sl,
+            phi_sl, settings.tol, settings.max_iter, slip_scale, record_force,
+            bank.friction_force)
+    # energy balance, vectorized over the history
+    dq = np.diff(qh, axis=0)
+    vbar = 0.5 * (vh[1:] + vh[:-1])
+    ebar = 0.5 * (e[1:] + e[:-1])
+    w_in = float(np.sum((dq @ load) * ebar))
+    w_visc = float(np.einsum("ki,ij,kj->", dq, C, vbar))
+    q1, v1 = x[:r], x[r:2 * r]
+    kin1, strain1, stored1 = _energies(model, bank, q1, v1, anchor)
+    energy = EnergyBalance(input=w_in, viscous=w_visc, joint_dissipation=float(dissip),
+                           kinetic=float(kin1 - kin0), strain=float(strain1 - strain0),
+                           joint_stored=stored1 - stored0)
+    final = NewmarkState(t=st.t + n_steps * dt, q=q1.copy(), v=v1.copy(), a=x[2 * r:].copy(),
+                         anchor=anchor, g=np.array(g_end, dtype=float), e=float(e[-1]))
+    t = st.t + dt * np.arange(n_steps + 1)
+    return NewmarkRun(t=t, q=qh, v=vh, slip=sh, state=final, energy=energy,
+                      newton_iterations=int(iters), joint_force=fh)

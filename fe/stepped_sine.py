@@ -1,0 +1,443 @@
+"""Stepped-sine campaigns: force levels x frequency lines, resumable on disk.
+
+At each line the structure is driven by ``f(t) = F cos(theta(t)) * load`` and the
+first harmonic of the periodic response is recorded (receptance ``X_1 / F`` at the
+output DOFs, joint-slip harmonics and half peak-to-peak slip amplitudes). Three
+protocols:
+
+* :class:`HBProtocol` (default, fast): harmonic balance (:mod:`fe.harmonic_balance`)
+  with natural-parameter continuation from line to line (the previous lines'
+  solutions predict the next one, as the structure's state does in a sweep).
+* :class:`NewmarkProtocol`: time integration (:mod:`fe.newmark`) with the state and
+  the excitation phase carried from line to line like a real stepped-sine test; a
+  line is finished when the response is periodic: the change ``d_p`` of the
+  first-harmonic vector between successive periods, extrapolated geometrically
+  (``d_p rho/(1 - rho)`` with ``rho`` the largest of the last three ratios
+  ``d_p/d_{p-1}``: a bound on the remaining drift of a decaying transient), falls
+  below ``tol`` relative to the response. Optional frequency pre-warping removes the
+  trapezoidal rule's frequency error: with ``n`` steps per period the discrete
+  system driven at ``w'`` responds like the continuous one at
+  ``(2/dt) tan(w' dt/2)``, so driving at ``w' = w pi/(n tan(pi/n))`` yields the
+  response at ``w`` exactly (the Jenkins banks are rate independent).
+* :class:`PaperProtocol`: the paper's fixed duration per line, every line from rest:
+  9 s of settling then a 1-s window in which the first harmonic is obtained by least
+  squares (paper section 3, Table 1: half peak-to-peak in the last second).
+
+Each level starts from rest with virgin joints, so levels are independent: each
+finished level is written to ``level_XX.npz`` in the store directory with a
+``manifest.json`` holding the SHA-256 hash of every input (model, joints, lines,
+levels, protocol); a rerun with the same inputs loads the finished levels and computes
+only the missing ones, giving the same numbers as an uninterrupted run.
+
+SI units: Hz for line frequencies, N for force amplitudes, m for displacements.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from fe.harmonic_balance import HBSettings, continuation
+from fe.newmark import NewmarkSettings, NewmarkState, integrate
+from fe.reduction import JointBank, ReducedModel
+
+__all__ = [
+    "HBProtocol",
+    "NewmarkProtocol",
+    "PaperProtocol",
+    "Campaign",
+    "LevelResult",
+    "CampaignResult",
+    "campaign_hash",
+    "run_level",
+    "run_campaign",
+]
+
+FORMAT = "iwanfe-stepped-sine/1"
+
+
+@dataclass(frozen=True)
+class HBProtocol:
+    """Harmonic balance with continuation over the lines."""
+
+    settings: HBSettings = field(default_factory=HBSettings)
+    name: str = "hb"
+
+
+@dataclass(frozen=True)
+class NewmarkProtocol:
+    """Time integration until periodic (see module docstring).
+
+    ``steps_per_period`` time steps per excitation period; ``tol`` relative bound on
+    the remaining drift of the first harmonic; ``min_periods``/``max_periods`` per line
+    (``max_periods`` reached raises); HHT ``alpha``; ``prewarp`` the frequency
+    correction of the trapezoidal rule.
+    """
+
+    steps_per_period: int = 256
+    tol: float = 1e-6
+    min_periods: int = 4
+    max_periods: int = 5000
+    alpha: float = 0.0
+    prewarp: bool = True
+    name: str = "newmark"
+
+
+@dataclass(frozen=True)
+class PaperProtocol:
+    """The paper's fixed ``settle`` + ``window`` seconds per line, from rest."""
+
+    settle: float = 9.0
+    window: float = 1.0
+    steps_per_period: int = 256
+    alpha: float = 0.0
+    name: str = "paper"
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """Force levels x frequency lines.
+
+    Parameters
+    ----------
+    frequency_hz : (n_lines,) line frequencies (Hz), swept in the given order.
+    force : (n_levels,) force amplitudes (N).
+    load : (n,) physical load pattern (multiplied by ``force``).
+    outputs : (n_out,) DOFs whose receptance is recorded.
+    protocol : HBProtocol | NewmarkProtocol | PaperProtocol
+    """
+
+    frequency_hz: np.ndarray
+    force: np.ndarray
+    load: np.ndarray
+    outputs: np.ndarray
+    protocol: object = field(default_factory=HBProtocol)
+
+    def __post_init__(self):
+        f = np.atleast_1d(np.asarray(self.frequency_hz, dtype=float))
+        F = np.atleast_1d(np.asarray(self.force, dtype=float))
+        if f.size < 1 or np.any(~(f > 0)):
+            raise ValueError("frequency lines must be > 0 Hz")
+        if F.size < 1 or np.any(~(F > 0)):
+            raise ValueError("force levels must be > 0 N")
+        object.__setattr__(self, "frequency_hz", f)
+        object.__setattr__(self, "force", F)
+        object.__setattr__(self, "load", np.asarray(self.load, dtype=float))
+        object.__setattr__(self, "outputs", np.atleast_1d(np.asarray(self.outputs, dtype=int)))
+
+
+@dataclass
+class LevelResult:
+    """One force level: receptance (n_lines, n_out) complex (m/N), first-harmonic slips
+    (n_lines, n_joints) complex (m), half peak-to-peak slips (n_lines, n_joints) (m),
+    work per line (Newton iterations or periods), wall time (s)."""
+
+    force: float
+    receptance: np.ndarray
+    slip: np.ndarray
+    slip_amplitude: np.ndarray
+    work: np.ndarray
+    elapsed: float
+
+    def to_npz(self, path: Path) -> None:
+        tmp = path.with_suffix(".tmp.npz")
+        np.savez(tmp, force=self.force, receptance=self.receptance, slip=self.slip,
+                 slip_amplitude=self.slip_amplitude, work=self.work, elapsed=self.elapsed)
+        os.replace(tmp, path)
+
+    @classmethod
+    def from_npz(cls, path: Path) -> "LevelResult":
+        with np.load(path) as d:
+            return cls(float(d["force"]), d["receptance"], d["slip"], d["slip_amplitude"],
+                       d["work"], float(d["elapsed"]))
+
+
+@dataclass
+class CampaignResult:
+    """All levels: ``receptance`` (n_levels, n_lines, n_out), ``slip`` and
+    ``slip_amplitude`` (n_levels, n_lines, n_joints), ``work`` (n_levels, n_lines),
+    ``elapsed`` (n_levels,) seconds, ``computed`` (n_levels,) False for levels loaded
+    from the store, and the campaign ``hash``."""
+
+    frequency_hz: np.ndarray
+    force: np.ndarray
+    receptance: np.ndarray
+    slip: np.ndarray
+    slip_amplitude: np.ndarray
+    work: np.ndarray
+    elapsed: np.ndarray
+    computed: np.ndarray
+    hash: str
+    protocol: str
+
+
+# --------------------------------------------------------------------------- hashing
+
+
+def _describe(obj):
+    if dataclasses.is_dataclass(obj):
+        return {"type": type(obj).__name__,
+                **{f.name: _describe(getattr(obj, f.name)) for f in dataclasses.fields(obj)}}
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return obj
+
+
+def campaign_hash(model: ReducedModel, bank: JointBank, campaign: Campaign) -> str:
+    """SHA-256 over the reduced model, the joint banks and the campaign definition."""
+    h = hashlib.sha256()
+    for a in (model.basis, model.M, model.K, model.C, model.G, model.K_T,
+              bank.stiffness, bank.slip_limit, campaign.frequency_hz, campaign.force,
+              campaign.load, campaign.outputs):
+        a = np.ascontiguousarray(a)
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    h.update(json.dumps(_describe(campaign.protocol), sort_keys=True).encode())
+    h.update(FORMAT.encode())
+    return h.hexdigest()
+
+
+# --------------------------------------------------------------------------- one level
+
+
+def _hb_level(model, bank, campaign, F, tick):
+    load = model.load(campaign.load) * F
+    sols = continuation(model, bank, load, 2 * np.pi * campaign.frequency_hz,
+                        campaign.protocol.settings, progress=tick)
+    rec = np.array([s.first_harmonic(model)[campaign.outputs] for s in sols]) / F
+    slip = np.array([s.slip[s.harmonics == 1][0] for s in sols])
+    amp = np.array([s.slip_amplitude for s in sols])
+    work = np.array([s.iterations for s in sols], dtype=float)
+    return rec, slip, amp, work
+
+
+def _first_harmonic(y, theta):
+    """``2/N sum y_n exp(-i theta_n)`` over one period of ``N`` samples; y (N, m)."""
+    return (2.0 / theta.size) * (np.exp(-1j * theta) @ y)
+
+
+def _newmark_level(model, bank, campaign, F, tick):
+    pr: NewmarkProtocol = campaign.protocol
+    N = pr.steps_per_period
+    load = model.load(campaign.load) * F
+    Bout = model.basis[campaign.outputs]
+    state = NewmarkState.rest(model, bank)
+    phase = 0.0
+    n_lines = campaign.frequency_hz.size
+    rec = np.empty((n_lines, campaign.outputs.size), dtype=complex)
+    slip = np.empty((n_lines, model.n_joints), dtype=complex)
+    amp = np.empty((n_lines, model.n_joints))
+    work = np.empty(n_lines)
+    k = np.arange(N + 1)
+    for li, f_hz in enumerate(campaign.frequency_hz):
+        w = 2 * np.pi * f_hz
+        if pr.prewarp:
+            w = w * np.pi / (N * np.tan(np.pi / N))
+        dt = 2 * np.pi / (w * N)
+        settings = NewmarkSettings(dt=dt, alpha=pr.alpha)
+        theta = phase + w * dt * k
+        e = np.cos(theta)
+        state.e = e[0]
+        prev, d_hist = None, []
+        for p in range(1, pr.max_periods + 1):
+            run = integrate(model, bank, load, e, settings, state)
+            state = run.state
+            z = np.concatenate([_first_harmonic(run.q[:-1] @ Bout.T, theta[:-1]),
+                                _first_harmonic(run.slip[:-1], theta[:-1])])
+            if prev is not None:
+                d = np.linalg.norm(z - prev) / max(np.linalg.norm(z), 1e-300)
+                d_hist.append(d)
+                if p >= pr.min_periods and len(d_hist) >= 4:
+                    ratios = np.array(d_hist[-3:]) / np.maximum(np.array(d_hist[-4:-1]), 1e-300)
+                    rho = float(np.max(ratios))
+                    if d < 1e-13 or (rho < 1.0 and d * rho / (1.0 - rho) < pr.tol):
+                        break
+            prev = z
+        else:
+            raise RuntimeError(f"no periodic response after {pr.max_periods} periods at "
+                               f"{f_hz:g} Hz, F = {F:g} N")
+        n_out = campaign.outputs.size
+        rec[li] = z[:n_out] / F
+        slip[li] = z[n_out:]
+        s_last = run.slip[:-1]
+        amp[li] = 0.5 * (s_last.max(axis=0) - s_last.min(axis=0))
+        work[li] = p
+        phase = float(np.mod(theta[-1], 2 * np.pi))
+        if tick is not None:
+            tick.update(1)
+    return rec, slip, amp, work
+
+
+def _paper_level(model, bank, campaign, F, tick):
+    pr: PaperProtocol = campaign.protocol
+    N = pr.steps_per_period
+    load = model.load(campaign.load) * F
+    Bout = model.basis[campaign.outputs]
+    n_lines = campaign.frequency_hz.size
+    rec = np.empty((n_lines, campaign.outputs.size), dtype=complex)
+    slip = np.empty((n_lines, model.n_joints), dtype=complex)
+    amp = np.empty((n_lines, model.n_joints))
+    work = np.empty(n_lines)
+    for li, f_hz in enumerate(campaign.frequency_hz):
+        w = 2 * np.pi * f_hz
+        dt = 2 * np.pi / (w * N)
+        settings = NewmarkSettings(dt=dt, alpha=pr.alpha)
+        n_settle = int(round(pr.settle / dt))
+        n_window = int(round(pr.window / dt))
+        state = NewmarkState.rest(model, bank)
+        chunk = max(1, int(round(1.0 / dt)))
+        done = 0
+        while done < n_settle:                       # settle in 1-s chunks, keep nothing
+            n = min(chunk, n_settle - done)
+            e = np.cos(w * dt * np.arange(done, done + n + 1))
+            state = integrate(model, bank, load, e, settings, state).state
+            done += n
+        e = np.cos(w * dt * np.arange(done, done + n_window + 1))
+        run = integrate(model, bank, load, e, settings, state)
+        theta = w * run.t
+        A = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
+        Y = np.hstack([run.q @ Bout.T, run.slip])
+        coef, *_ = np.linalg.lstsq(A, Y, rcond=None)
+        z = coef[1] - 1j * coef[2]
+        n_out = campaign.outputs.size
+        rec[li] = z[:n_out] / F
+        slip[li] = z[n_out:]
+        amp[li] = 0.5 * (run.slip.max(axis=0) - run.slip.min(axis=0))
+        work[li] = (n_settle + n_window) / N
+        if tick is not None:
+            tick.update(1)
+    return rec, slip, amp, work
+
+
+_LEVEL_RUNNERS = {"hb": _hb_level, "newmark": _newmark_level, "paper": _paper_level}
+
+
+def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: int,
+              tick=None) -> LevelResult:
+    """Compute one force level of ``campaign`` (all lines), from rest."""
+    F = float(campaign.force[level])
+    t0 = time.perf_counter()
+    runner = _LEVEL_RUNNERS[campaign.protocol.name]
+    rec, slip, amp, work = runner(model, bank, campaign, F, tick)
+    return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)
+
+
+def _level_job(args):
+    model, bank, campaign, level = args
+    return level, run_level(model, bank, campaign, level)
+
+
+# --------------------------------------------------------------------------- campaign
+
+
+def _write_manifest(store: Path, manifest: dict) -> None:
+    tmp = store / "manifest.json.tmp"
+    tmp.write_text(json.dumps(manifest, indent=1))
+    os.replace(tmp, store / "manifest.json")
+
+
+def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
+                 store: str | os.PathLike | None = None, progress: bool = True,
+                 workers: int = 1,
+                 on_level: Callable[[int, LevelResult], None] | None = None) -> CampaignResult:
+    """Run (or resume) a campaign.
+
+    Parameters
+    ----------
+    model, bank, campaign
+    store : path, optional
+        Directory holding ``manifest.json`` and one ``level_XX.npz`` per finished
+        level. Finished levels of a campaign with the same hash are loaded, not
+        recomputed. A store holding another campaign raises ``ValueError``.
+    progress : bool
+        tqdm progress bar on stderr (one tick per line).
+    workers : int
+        Levels computed in parallel processes (levels are independent).
+    on_level : callable, optional
+        Called as ``on_level(level, result)`` after each newly computed level has been
+        stored (an exception raised there interrupts the campaign after the save).
+
+    Returns
+    -------
+    CampaignResult
+    """
+    digest = campaign_hash(model, bank, campaign)
+    n_levels, n_lines = campaign.force.size, campaign.frequency_hz.size
+    results: dict[int, LevelResult] = {}
+    manifest = None
+    if store is not None:
+        store = Path(store)
+        store.mkdir(parents=True, exist_ok=True)
+        mpath = store / "manifest.json"
+        if mpath.exists():
+            try:
+                manifest = json.loads(mpath.read_text())
+            except (OSError, json.JSONDecodeError) as exc:
+                raise ValueError(f"{mpath}: unreadable campaign manifest ({exc})") from None
+            if manifest.get("hash") != digest:
+                raise ValueError(f"{store} holds a campaign with other parameters "
+                                 f"(hash {str(manifest.get('hash'))[:12]}, this one "
+                                 f"{digest[:12]}); use another directory")
+            for key, info in manifest.get("levels", {}).items():
+                path = store / info["file"]
+                if path.exists():
+                    results[int(key)] = LevelResult.from_npz(path)
+        else:
+            manifest = {"format": FORMAT, "hash": digest, "protocol": campaign.protocol.name,
+                        "force": campaign.force.tolist(),
+                        "frequency_hz": [float(campaign.frequency_hz[0]),
+                                         float(campaign.frequency_hz[-1]), n_lines],
+                        "levels": {}}
+            _write_manifest(store, manifest)
+    loaded = set(results)
+    todo = [lv for lv in range(n_levels) if lv not in results]
+
+    def finish(level: int, res: LevelResult) -> None:
+        results[level] = res
+        if store is not None:
+            name = f"level_{level:02d}.npz"
+            res.to_npz(store / name)
+            manifest["levels"][str(level)] = {"file": name, "force": res.force,
+                                              "elapsed_s": res.elapsed}
+            _write_manifest(store, manifest)
+        if on_level is not None:
+            on_level(level, res)
+
+    bar = None
+    if progress and todo:
+        from tqdm import tqdm
+        bar = tqdm(total=len(todo) * n_lines, unit="line", desc=f"{campaign.protocol.name} campaign",
+                   leave=False)
+    try:
+        if workers > 1 and len(todo) > 1:
+            from concurrent.futures import ProcessPoolExecutor, as_completed
+            with ProcessPoolExecutor(max_workers=workers) as ex:
+                futs = [ex.submit(_level_job, (model, bank, campaign, lv)) for lv in todo]
+                for fut in as_completed(futs):
+                    lv, res = fut.result()
+                    finish(lv, res)
+                    if bar is not None:
+                        bar.update(n_lines)
+        else:
+            for lv in todo:
+                finish(lv, run_level(model, bank, campaign, lv, bar))
+    finally:
+        if bar is not None:
+            bar.close()
+    order = range(n_levels)
+    return CampaignResult(
+        frequency_hz=campaign.frequency_hz, force=campaign.force,
+        receptance=np.array([results[i].receptance for i in order]),
+        slip=np.array([results[i].slip for i in order]),
+        slip_amplitude=np.array([results[i].slip_amplitude for i in order]),
+        work=np.array([results[i].work for i in order]),
+        elapsed=np.array([results[i].elapsed for i in order]),
+        computed=np.array([i not in loaded for i in order]),
+        hash=digest, protocol=campaign.protocol.name)

@@ -1,0 +1,81 @@
+"""Reduced bases of jointed structures (fe.reduction), checked against direct solutions."""
+import numpy as np
+import pytest
+import scipy.linalg as la
+
+from fe.reduction import JointBank, JointedSystem, rayleigh_damping, reduced_basis
+from joints.iwan import IwanParameters
+
+
+def _chain(n=8, seed=0):
+    """Two coupled spring-mass chains with two joints; random (seeded) masses/springs."""
+    rng = np.random.default_rng(seed)
+    m = rng.uniform(0.5, 2.0, 2 * n)
+    k = rng.uniform(0.5e6, 2e6, 2 * n)
+    K = np.zeros((2 * n, 2 * n))
+    for off in (0, n):
+        for i in range(n):
+            a = off + i
+            K[a, a] += k[a]
+            if i > 0:
+                K[a - 1, a - 1] += k[a]
+                K[a - 1, a] -= k[a]
+                K[a, a - 1] -= k[a]
+    G = np.zeros((2, 2 * n))
+    G[0, 0], G[0, n] = -1, 1
+    G[1, 3], G[1, n + 3] = -1, 1
+    K_T = np.array([1.1e5, 2.3e5])
+    M = np.diag(m)
+    KJ = K + G.T @ np.diag(K_T) @ G
+    return JointedSystem(M=M, K=K, C=rayleigh_damping(M, KJ, 0.5, 7e-5), G=G, K_T=K_T)
+
+
+def test_stuck_stiffness_is_K_plus_joint_springs():
+    s = _chain()
+    # joint 0 between DOF 0 and 8: adds +K_T on both diagonals, -K_T off-diagonal
+    d = s.K_J - s.K
+    assert d[0, 0] == pytest.approx(1.1e5)
+    assert d[0, 8] == pytest.approx(-1.1e5)
+    assert d[3, 11] == pytest.approx(-2.3e5)
+    assert np.count_nonzero(d) == 8
+
+
+def test_full_basis_is_mass_orthonormal_and_diagonalizes_KJ():
+    s = _chain()
+    m = reduced_basis(s)
+    lam = la.eigh(s.K_J, s.M, eigvals_only=True)          # independent eigen-solve
+    np.testing.assert_allclose(m.omega ** 2, lam, rtol=1e-10)
+    np.testing.assert_allclose(m.M, np.eye(16), atol=1e-10)
+    np.testing.assert_allclose(m.K, np.diag(lam), rtol=1e-9, atol=1e-6 * lam.max())
+    q = np.random.default_rng(1).normal(size=16)
+    np.testing.assert_allclose(m.slip(q), s.G @ (m.basis @ q), rtol=1e-12)
+
+
+def test_static_joint_modes_reproduce_static_joint_compliance():
+    s = _chain()
+    exact = s.G @ np.linalg.solve(s.K_J, s.G.T)           # direct static solve
+    trunc = reduced_basis(s, n_modes=3)
+    enriched = reduced_basis(s, n_modes=3, static_joint_modes=True)
+    for m in (trunc, enriched):
+        assert m.basis.T @ s.M @ m.basis == pytest.approx(np.eye(m.n_reduced), abs=1e-9)
+    comp = lambda m: m.G @ np.linalg.solve(m.K, m.G.T)
+    assert np.max(np.abs(comp(trunc) - exact) / np.abs(exact).max()) > 1e-2
+    np.testing.assert_allclose(comp(enriched), exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())
+    assert enriched.n_reduced == 5
+
+
+def test_joint_bank_energy_bookkeeping():
+    p = IwanParameters(chi=-0.5, K_T=1.1e5, F_S=400.0, beta=4.0)
+    bank = JointBank.from_iwan(p, 20, n_joints=2)
+    np.testing.assert_allclose(bank.K_T, 1.1e5, rtol=1e-12)
+    anchor = bank.initial_anchor()
+    s = np.array([1e-3, -2e-4])
+    F, kt, new = bank.update(s, anchor)
+    # stored energy of the trial state equals sum 0.5 k (s - x)^2, computed by hand
+    stretch = s[:, None] - new
+    assert bank.stored_energy(s, new) == pytest.approx(0.5 * np.sum(bank.stiffness * stretch ** 2))
+    # a slider that moved by d dissipated k phi d
+    moved = np.abs(new - anchor)
+    assert bank.dissipated(anchor, new) == pytest.approx(np.sum(bank.stiffness * bank.slip_limit * moved))
+    with pytest.raises(ValueError):
+        JointBank(np.ones((2, 3)), np.ones((2, 4)))
