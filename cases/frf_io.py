@@ -1,0 +1,325 @@
+"""FRF files: one FRF set (one reference, one or more response points) per file.
+
+CSV format (written and read here)::
+
+    # quantity = receptance
+    # excitation = 2.5
+    # reference = 1+Z
+    freq_hz,re_1+Z,im_1+Z,re_7+Z,im_7+Z
+
+* optional leading ``# key = value`` lines, keys ``quantity`` (receptance | mobility |
+  accelerance), ``excitation`` (excitation amplitude of this set, any unit proportional
+  to force, > 0) and ``reference`` (label of the drive point);
+* then one header line: ``freq_hz`` (Hz, strictly increasing, > 0; any spacing) and,
+  for every response point ``P``, the pair ``re_P`` / ``im_P`` (real and imaginary part
+  of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
+  a comma; points keep the order of their ``re_`` columns. No other columns.
+
+Errors are :class:`cases.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
+column name), like the measured-data reader.
+
+UFF 58 (universal file, via pyuff): every data set 58 with function type 4 (FRF) is a
+response point; all must share the reference node/direction and the abscissa.
+Point label = ``"<node><+|-><X|Y|Z|RX|RY|RZ>"`` (``"<node>"`` for a scalar direction).
+Quantity from the ordinate specific data type (8 displacement -> receptance,
+11 velocity -> mobility, 12 acceleration -> accelerance). The excitation level is
+read from an ID line holding ``excitation=<value>`` (the writer puts it in ID line 4).
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from cases.errors import InputError
+
+QUANTITIES = ("receptance", "mobility", "accelerance")
+_UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
+_UFF_ORDINATE_CODE = {v: k for k, v in _UFF_ORDINATE.items()}
+_DIRS = {1: "+X", 2: "+Y", 3: "+Z", 4: "+RX", 5: "+RY", 6: "+RZ",
+         -1: "-X", -2: "-Y", -3: "-Z", -4: "-RX", -5: "-RY", -6: "-RZ"}
+_DIR_CODE = {v: k for k, v in _DIRS.items()}
+_LABEL = re.compile(r"^(\d+)([+-]R?[XYZ])?$")
+_EXCITATION = re.compile(r"excitation\s*=\s*([-+0-9.eE]+)")
+
+
+@dataclass
+class FRFSet:
+    """FRFs of one reference at one excitation level.
+
+    Attributes
+    ----------
+    freq_hz : (n,) frequencies, Hz.
+    frf : (n, n_points) complex FRFs (SI: m/N, m/s/N or m/s^2/N).
+    points : list of response-point labels (n_points).
+    quantity : "receptance", "mobility", "accelerance" or None if unknown.
+    excitation : excitation amplitude of this set (unit proportional to force) or None.
+    reference : drive-point label or None.
+    source : file name ("" if built in memory).
+    """
+
+    freq_hz: np.ndarray
+    frf: np.ndarray
+    points: list
+    quantity: str | None = None
+    excitation: float | None = None
+    reference: str | None = None
+    source: str = ""
+
+    def __post_init__(self):
+        self.freq_hz = np.asarray(self.freq_hz, float)
+        self.frf = np.asarray(self.frf, complex)
+        if self.frf.ndim == 1:
+            self.frf = self.frf[:, None]
+        self.points = [str(p) for p in self.points]
+        if self.frf.shape != (self.freq_hz.size, len(self.points)):
+            raise ValueError(f"frf shape {self.frf.shape} does not match "
+                             f"({self.freq_hz.size} frequencies, {len(self.points)} points)")
+        if self.quantity is not None and self.quantity not in QUANTITIES:
+            raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, "
+                             f"got {self.quantity!r}")
+
+
+def _fail(source, line, column, message):
+    raise InputError(f"{source}:{line}:{column}: {message}")
+
+
+# ------------------------------------------------------------------------------- CSV
+
+def read_frf_csv(path) -> FRFSet:
+    """Read an FRF CSV file (format in the module docstring)."""
+    path = Path(path)
+    src = str(path)
+    meta: dict[str, tuple[int, str]] = {}
+    header = None
+    rows = []
+    with open(path, encoding="utf-8-sig") as fh:
+        for lineno, text in enumerate(fh, start=1):
+            s = text.strip()
+            if not s:
+                continue
+            if header is None and s.startswith("#"):
+                if "=" not in s:
+                    _fail(src, lineno, 1, "comment line must read '# key = value'")
+                key, value = (t.strip() for t in s[1:].split("=", 1))
+                if key not in ("quantity", "excitation", "reference"):
+                    _fail(src, lineno, key, "unknown key (known: quantity, excitation, reference)")
+                meta[key] = (lineno, value)
+                continue
+            fields = [t.strip() for t in s.split(",")]
+            if header is None:
+                header, header_line = fields, lineno
+            else:
+                rows.append((lineno, fields))
+    if header is None:
+        _fail(src, 1, 1, "empty file: expected a header line")
+    if header[0] != "freq_hz":
+        _fail(src, header_line, header[0] or 1, "first column must be 'freq_hz'")
+    points, re_col, im_col = [], {}, {}
+    for j, name in enumerate(header[1:], start=1):
+        part, _, label = name.partition("_")
+        if part not in ("re", "im") or not label:
+            _fail(src, header_line, name, "unknown column: expected re_<point> or im_<point>")
+        target = re_col if part == "re" else im_col
+        if label in target:
+            _fail(src, header_line, name, "duplicate column name")
+        target[label] = j
+        if part == "re":
+            points.append(label)
+    for label in points:
+        if label not in im_col:
+            _fail(src, header_line, f"re_{label}", f"no matching column im_{label}")
+    for label in im_col:
+        if label not in re_col:
+            _fail(src, header_line, f"im_{label}", f"no matching column re_{label}")
+    if not points:
+        _fail(src, header_line, "freq_hz", "no FRF columns (re_<point>, im_<point>)")
+    if len(rows) < 2:
+        _fail(src, header_line + 1, "freq_hz", "fewer than 2 frequency lines")
+    values = np.empty((len(rows), len(header)))
+    for i, (lineno, fields) in enumerate(rows):
+        if len(fields) != len(header):
+            _fail(src, lineno, min(len(fields), len(header)) + 1,
+                  f"row has {len(fields)} fields, header has {len(header)}")
+        for j, t in enumerate(fields):
+            try:
+                v = float(t)
+            except ValueError:
+                _fail(src, lineno, header[j], f"not a number: {t!r}")
+            if not math.isfinite(v):
+                _fail(src, lineno, header[j], f"not a finite number: {t!r}")
+            values[i, j] = v
+    freq = values[:, 0]
+    lines = np.array([ln for ln, _ in rows])
+    bad = np.flatnonzero(freq <= 0)
+    if bad.size:
+        _fail(src, lines[bad[0]], "freq_hz", f"frequency must be > 0 Hz, got {freq[bad[0]]:g}")
+    bad = np.flatnonzero(np.diff(freq) <= 0)
+    if bad.size:
+        _fail(src, lines[bad[0] + 1], "freq_hz", "frequencies must be strictly increasing")
+    frf = values[:, [re_col[p] for p in points]] + 1j * values[:, [im_col[p] for p in points]]
+
+    quantity = excitation = reference = None
+    if "quantity" in meta:
+        ln, quantity = meta["quantity"]
+        if quantity not in QUANTITIES:
+            _fail(src, ln, "quantity", f"must be one of {', '.join(QUANTITIES)}, got {quantity!r}")
+    if "excitation" in meta:
+        ln, text = meta["excitation"]
+        try:
+            excitation = float(text)
+        except ValueError:
+            _fail(src, ln, "excitation", f"not a number: {text!r}")
+        if not (math.isfinite(excitation) and excitation > 0):
+            _fail(src, ln, "excitation", f"excitation must be a finite number > 0, got {text!r}")
+    if "reference" in meta:
+        reference = meta["reference"][1]
+    return FRFSet(freq, frf, points, quantity, excitation, reference, src)
+
+
+def write_frf_csv(path, frfset: FRFSet) -> None:
+    """Write an FRF set as CSV (17 significant digits: exact round trip)."""
+    for p in frfset.points:
+        if "," in p or not p:
+            raise ValueError(f"point label {p!r} cannot be used as a CSV column name")
+    lines = []
+    if frfset.quantity:
+        lines.append(f"# quantity = {frfset.quantity}")
+    if frfset.excitation is not None:
+        lines.append(f"# excitation = {float(frfset.excitation)!r}")
+    if frfset.reference:
+        lines.append(f"# reference = {frfset.reference}")
+    lines.append(",".join(["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]))
+    table = np.empty((frfset.freq_hz.size, 1 + 2 * len(frfset.points)))
+    table[:, 0] = frfset.freq_hz
+    table[:, 1::2] = frfset.frf.real
+    table[:, 2::2] = frfset.frf.imag
+    lines.extend(",".join(repr(float(v)) for v in row) for row in table)
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+# ------------------------------------------------------------------------------- UFF
+
+def _label(node, direction) -> str:
+    return f"{int(node)}{_DIRS.get(int(direction), '')}"
+
+
+def _node_dir(label: str, default_node: int) -> tuple[int, int]:
+    m = _LABEL.match(label)
+    if not m:
+        return default_node, 0
+    return int(m.group(1)), _DIR_CODE.get(m.group(2), 0) if m.group(2) else 0
+
+
+def read_frf_uff(path) -> FRFSet:
+    """Read the FRFs (data sets 58, function type 4) of a universal file."""
+    import pyuff
+
+    src = str(path)
+    if not Path(path).is_file():
+        raise InputError(f"{src}: no such file")
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            uff = pyuff.UFF(src)
+            types = np.asarray(uff.get_set_types())
+            idx = [int(i) for i in np.flatnonzero(types == 58)]
+            sets = uff.read_sets(idx) if idx else []
+    except Exception as exc:  # pyuff raises bare Exception
+        raise InputError(f"{src}: not a readable universal file ({exc})") from None
+    if isinstance(sets, dict):
+        sets = [sets]
+    sets = [s for s in sets if int(s.get("func_type", 0)) == 4]
+    if not sets:
+        raise InputError(f"{src}: no FRF (data set 58, function type 4) in the file")
+    refs = {(int(s["ref_node"]), int(s["ref_dir"])) for s in sets}
+    if len(refs) > 1:
+        raise InputError(f"{src}: FRFs of {len(refs)} references; one FRF set per file "
+                         "needs a single reference")
+    x = np.asarray(sets[0]["x"], float)
+    for k, s in enumerate(sets[1:], start=2):
+        if np.shape(s["x"]) != x.shape or not np.allclose(s["x"], x, rtol=1e-9, atol=0):
+            raise InputError(f"{src}: FRF {k} has a different frequency axis than FRF 1")
+    frf = np.stack([np.asarray(s["data"], complex) for s in sets], axis=1)
+    points = [_label(s["rsp_node"], s["rsp_dir"]) for s in sets]
+    if len(set(points)) != len(points):
+        raise InputError(f"{src}: duplicate response point in FRFs ({', '.join(points)})")
+    codes = {int(s.get("ordinate_spec_data_type", 0)) for s in sets}
+    quantity = _UFF_ORDINATE.get(codes.pop()) if len(codes) == 1 else None
+    excitation = None
+    for key in ("id1", "id2", "id3", "id4", "id5"):
+        m = _EXCITATION.search(str(sets[0].get(key, "")))
+        if m:
+            try:
+                excitation = float(m.group(1))
+            except ValueError:
+                raise InputError(f"{src}: {key}: bad excitation value {m.group(1)!r}") from None
+            if not (math.isfinite(excitation) and excitation > 0):
+                raise InputError(f"{src}: {key}: excitation must be > 0, got {m.group(1)}")
+            break
+    if np.any(np.diff(x) <= 0):
+        raise InputError(f"{src}: frequencies must be strictly increasing")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(frf))):
+        raise InputError(f"{src}: non-finite frequency or FRF value")
+    ref = refs.pop()
+    return FRFSet(x, frf, points, quantity, excitation, _label(*ref), src)
+
+
+def write_frf_uff(path, frfset: FRFSet) -> None:
+    """Write an FRF set as ASCII universal file data sets 58 (one per response point).
+
+    Ordinates are double precision (12 significant digits). Abscissae are limited by the
+    format (E13.5): even spacing (within 1e-9) is stored as minimum and increment with 6
+    significant digits each, uneven spacing (stepped sine) as every frequency with 6
+    significant digits; use CSV when frequencies need more digits. (pyuff's binary
+    writer is not used: it corrupted multi-set files in pyuff 2.5.8.)"""
+    import pyuff
+
+    f = frfset.freq_hz
+    df = np.diff(f)
+    even = bool(np.allclose(df, df[0], rtol=1e-9, atol=0)) if f.size > 1 else True
+    ref_node, ref_dir = _node_dir(frfset.reference or "1", 1)
+    code = _UFF_ORDINATE_CODE.get(frfset.quantity, 0)
+    id4 = f"excitation={float(frfset.excitation)!r}" if frfset.excitation is not None else "NONE"
+    dsets = []
+    for j, label in enumerate(frfset.points):
+        node, direction = _node_dir(label, j + 1)
+        dsets.append(dict(
+            type=58, binary=0, func_type=4, id1="iwanfe FRF", id2=label[:80],
+            id4=id4, rsp_node=node, rsp_dir=direction, ref_node=ref_node, ref_dir=ref_dir,
+            rsp_ent_name="iwanfe", ref_ent_name="iwanfe", abscissa_spacing=int(even),
+            abscissa_spec_data_type=18, ordinate_spec_data_type=code,
+            orddenom_spec_data_type=13, x=f.copy(), data=frfset.frf[:, j].copy()))
+    Path(path).unlink(missing_ok=True)
+    with contextlib.redirect_stdout(io.StringIO()):
+        pyuff.UFF(str(path)).write_sets(dsets, mode="overwrite")
+
+
+# --------------------------------------------------------------------------- dispatch
+
+def read_frf(path) -> FRFSet:
+    """Read an FRF set from CSV (``.csv``) or universal file (``.uff``, ``.unv``, other).
+
+    The format is chosen by extension; files without a known extension are sniffed
+    (a universal file starts with a ``-1`` delimiter line)."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext == ".csv":
+        return read_frf_csv(path)
+    if ext in (".uff", ".unv", ".uf"):
+        return read_frf_uff(path)
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        first = fh.readline().strip()
+    return read_frf_uff(path) if first == "-1" else read_frf_csv(path)
+
+
+def write_frf(path, frfset: FRFSet) -> None:
+    """Write CSV for ``.csv``, else a universal file."""
+    if Path(path).suffix.lower() == ".csv":
+        write_frf_csv(path, frfset)
+    else:
+        write_frf_uff(path, frfset)

@@ -1,0 +1,383 @@
+"""Measured amplitude-dependent modal data: the CSV reader and writer.
+
+Format (``shared/spec/measured-data.md``): plain comma-separated text, one header
+line, one row per excitation level and mode, no comment lines. Columns, in any order:
+
+=====================  ========  ==========================================================
+column                 required  meaning
+=====================  ========  ==========================================================
+``level``              yes       1-based integer; increases with excitation
+``excitation``         yes       excitation amplitude, any unit proportional to force (> 0)
+``omega2``             yes       undamped natural frequency squared, rad^2/s^2 (> 0)
+``zeta``               yes       damping ratio as a fraction, in (0, 1)
+``mode``               no        integer mode label (default 1)
+``response_amplitude`` no        response amplitude at resonance, any consistent unit (> 0)
+``run_order``          no        integer chronological order (default = ``level``)
+``x_*``                no        free user annotations, kept and otherwise ignored
+=====================  ========  ==========================================================
+
+Every violated rule raises :class:`cases.errors.InputError` with one line
+``FILE:LINE:COLUMN: message``, where ``LINE`` is the 1-based line number in the file
+(the header is line 1, the first data row line 2) and ``COLUMN`` is the column *name*
+as written in the header (for a rule about a whole row, the column the rule is about:
+``level`` for a duplicate (mode, level), ``excitation`` for a non-increasing
+excitation, ``mode`` for too few levels). Entirely blank lines are skipped (their line
+numbers still count). Beyond the spec the reader also rejects: an empty file, a
+duplicated or empty header name, a row whose field count differs from the header, a
+non-integer or < 1 ``level``, a non-integer ``mode`` or ``run_order``, and a
+``response_amplitude`` <= 0.
+
+Warnings (kept in :attr:`MeasuredData.warnings`, never raised): a ``zeta`` column whose
+median exceeds 0.2 (looks like percent) and, per mode, excitation ratios between
+successive levels that differ from their median by more than 5 %.
+
+Run ``python -m cases.measured FILE`` to validate a file: it prints a summary and the
+warnings, or one error line on stderr with exit status 2.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import sys
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from cases.errors import InputError
+
+REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
+OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order")
+KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
+MIN_LEVELS = 4
+PERCENT_ZETA_MEDIAN = 0.2
+RATIO_TOLERANCE = 0.05
+
+
+@dataclass
+class MeasuredData:
+    """Amplitude-dependent modal data, one entry per (mode, level), in file order.
+
+    Attributes
+    ----------
+    level, mode, run_order : ndarray of int
+    excitation : ndarray of float
+        Excitation amplitude (unit proportional to force).
+    omega2 : ndarray of float
+        Undamped natural frequency squared, rad^2/s^2.
+    zeta : ndarray of float
+        Damping ratio (fraction).
+    response_amplitude : ndarray of float or None
+        Response amplitude at resonance, or None if the file has no such column.
+    extra : dict[str, ndarray]
+        ``x_*`` annotation columns: float arrays where every value is numeric, else
+        str arrays.
+    warnings : list[str]
+        Non-fatal findings (percent-looking zeta, non-constant excitation ratios).
+    line : ndarray of int
+        1-based line number of each entry in the source file (0 if not from a file).
+    source : str
+        The file name the data came from ("" if built in memory).
+    """
+
+    level: np.ndarray
+    excitation: np.ndarray
+    omega2: np.ndarray
+    zeta: np.ndarray
+    mode: np.ndarray
+    run_order: np.ndarray
+    response_amplitude: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+    line: np.ndarray | None = None
+    source: str = ""
+
+    def __post_init__(self):
+        self.level = np.asarray(self.level, dtype=int)
+        n = self.level.size
+        self.excitation = np.asarray(self.excitation, dtype=float)
+        self.omega2 = np.asarray(self.omega2, dtype=float)
+        self.zeta = np.asarray(self.zeta, dtype=float)
+        self.mode = np.asarray(self.mode, dtype=int) if self.mode is not None else np.ones(n, int)
+        self.run_order = (np.asarray(self.run_order, dtype=int)
+                          if self.run_order is not None else self.level.copy())
+        if self.response_amplitude is not None:
+            self.response_amplitude = np.asarray(self.response_amplitude, dtype=float)
+        self.line = np.zeros(n, int) if self.line is None else np.asarray(self.line, dtype=int)
+        self.extra = {k: np.asarray(v) for k, v in self.extra.items()}
+        arrays = [self.excitation, self.omega2, self.zeta, self.mode, self.run_order,
+                  self.line, *self.extra.values()]
+        if self.response_amplitude is not None:
+            arrays.append(self.response_amplitude)
+        if any(a.shape != (n,) for a in arrays):
+            raise ValueError("MeasuredData: all columns must be 1-D arrays of equal length")
+
+    def __len__(self) -> int:
+        return int(self.level.size)
+
+    @property
+    def modes(self) -> np.ndarray:
+        """Sorted distinct mode labels."""
+        return np.unique(self.mode)
+
+    @property
+    def omega_hz(self) -> np.ndarray:
+        """Undamped natural frequency sqrt(omega2)/(2 pi), Hz."""
+        return np.sqrt(self.omega2) / (2.0 * np.pi)
+
+    def take(self, index) -> "MeasuredData":
+        """Entries selected by an index or boolean mask (warnings are kept)."""
+        index = np.asarray(index)
+        ra = None if self.response_amplitude is None else self.response_amplitude[index]
+        return replace(
+            self, level=self.level[index], excitation=self.excitation[index],
+            omega2=self.omega2[index], zeta=self.zeta[index], mode=self.mode[index],
+            run_order=self.run_order[index], response_amplitude=ra,
+            extra={k: v[index] for k, v in self.extra.items()}, line=self.line[index],
+            warnings=list(self.warnings))
+
+    def for_mode(self, m: int) -> "MeasuredData":
+        """Entries of mode ``m`` sorted by level; ValueError if the mode is absent."""
+        idx = np.flatnonzero(self.mode == int(m))
+        if idx.size == 0:
+            raise ValueError(f"mode {m} not in data (modes: {', '.join(map(str, self.modes))})")
+        return self.take(idx[np.argsort(self.level[idx], kind="stable")])
+
+
+def _fail(source: str, line: int, column: str, message: str) -> None:
+    raise InputError(f"{source}:{line}:{column}: {message}")
+
+
+def _parse_float(text: str, source: str, line: int, column: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        _fail(source, line, column, f"not a number: {text!r}")
+    if not math.isfinite(value):
+        _fail(source, line, column, f"not a finite number: {text!r}")
+    return value
+
+
+def _parse_int(text: str, source: str, line: int, column: str) -> int:
+    value = _parse_float(text, source, line, column)
+    if value != round(value):
+        _fail(source, line, column, f"must be an integer, got {text!r}")
+    return int(round(value))
+
+
+def _read_rows(path: Path, source: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """Header names and (line number, fields) of the non-blank data rows."""
+    with open(path, newline="", encoding="utf-8-sig") as fh:
+        reader = csv.reader(fh)
+        header: list[str] | None = None
+        rows: list[tuple[int, list[str]]] = []
+        for fields in reader:
+            lineno = reader.line_num
+            if not any(f.strip() for f in fields):
+                continue
+            fields = [f.strip() for f in fields]
+            if header is None:
+                header = fields
+                header_line = lineno
+                continue
+            rows.append((lineno, fields))
+    if header is None:
+        _fail(source, 1, "1", "empty file: expected a header line")
+    if header_line != 1:
+        _fail(source, header_line, "1", "header must be on line 1")
+    return header, rows
+
+
+def _check_header(header: list[str], source: str) -> None:
+    seen: set[str] = set()
+    for j, name in enumerate(header, start=1):
+        if not name:
+            _fail(source, 1, str(j), "empty column name in header")
+        if name in seen:
+            _fail(source, 1, name, "duplicate column name")
+        seen.add(name)
+        if name not in KNOWN_COLUMNS and not name.startswith("x_"):
+            _fail(source, 1, name, "unknown column (known: " + ", ".join(KNOWN_COLUMNS)
+                  + "; free annotations must start with 'x_')")
+    for name in REQUIRED_COLUMNS:
+        if name not in seen:
+            _fail(source, 1, name, "missing required column (header: "
+                  + ", ".join(header) + ")")
+
+
+def read_measured(path) -> MeasuredData:
+    """Read and validate a measured-data CSV file (``shared/spec/measured-data.md``).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    MeasuredData
+        Entries in file order; ``warnings`` lists non-fatal findings, each prefixed by
+        the file name.
+
+    Raises
+    ------
+    cases.errors.InputError
+        One line ``FILE:LINE:COLUMN: message`` for the first violated rule.
+    """
+    path = Path(path)
+    source = str(path)
+    header, rows = _read_rows(path, source)
+    _check_header(header, source)
+    if not rows:
+        _fail(source, 2, "level", "no data rows")
+
+    col = {name: j for j, name in enumerate(header)}
+    n = len(rows)
+    lines = np.array([ln for ln, _ in rows], dtype=int)
+    for ln, fields in rows:
+        if len(fields) != len(header):
+            _fail(source, ln, str(min(len(fields), len(header)) + 1),
+                  f"row has {len(fields)} fields, header has {len(header)}")
+
+    def floats(name):
+        return np.array([_parse_float(f[col[name]], source, ln, name) for ln, f in rows])
+
+    def ints(name):
+        return np.array([_parse_int(f[col[name]], source, ln, name) for ln, f in rows], int)
+
+    level = ints("level")
+    excitation = floats("excitation")
+    omega2 = floats("omega2")
+    zeta = floats("zeta")
+    mode = ints("mode") if "mode" in col else np.ones(n, int)
+    run_order = ints("run_order") if "run_order" in col else level.copy()
+    response = floats("response_amplitude") if "response_amplitude" in col else None
+
+    def first_bad(mask, name, message):
+        bad = np.flatnonzero(mask)
+        if bad.size:
+            i = bad[0]
+            _fail(source, lines[i], name, message(i))
+
+    first_bad(level < 1, "level", lambda i: f"level must be >= 1, got {level[i]}")
+    first_bad(excitation <= 0, "excitation",
+              lambda i: f"excitation must be > 0, got {excitation[i]:g}")
+    first_bad(omega2 <= 0, "omega2", lambda i: f"omega2 must be > 0 rad^2/s^2, got {omega2[i]:g}")
+    first_bad((zeta <= 0) | (zeta >= 1), "zeta",
+              lambda i: f"zeta must be a fraction in (0, 1), got {zeta[i]:g}"
+              + (" (percent? write 0.01278 for 1.278 %)" if zeta[i] >= 1 else ""))
+    if response is not None:
+        first_bad(response <= 0, "response_amplitude",
+                  lambda i: f"response_amplitude must be > 0, got {response[i]:g}")
+
+    # Duplicate (mode, level): report the second occurrence in file order.
+    key = np.stack([mode, level], axis=1)
+    _, first_index = np.unique(key, axis=0, return_index=True)
+    dup = np.ones(n, bool)
+    dup[first_index] = False
+    first_bad(dup, "level", lambda i: f"duplicate (mode, level) = ({mode[i]}, {level[i]})")
+
+    warnings: list[str] = []
+    for m in np.unique(mode):
+        idx = np.flatnonzero(mode == m)
+        idx = idx[np.argsort(level[idx], kind="stable")]
+        if idx.size < MIN_LEVELS:
+            _fail(source, lines[idx].min(), "mode",
+                  f"mode {m} has {idx.size} levels, at least {MIN_LEVELS} are needed")
+        e = excitation[idx]
+        bad = np.flatnonzero(np.diff(e) <= 0)
+        if bad.size:
+            i, j = idx[bad[0]], idx[bad[0] + 1]
+            _fail(source, lines[j], "excitation",
+                  f"mode {m}: excitation of level {level[j]} ({excitation[j]:g}) does not "
+                  f"exceed that of level {level[i]} ({excitation[i]:g})")
+        ratio = e[1:] / e[:-1]
+        median = np.median(ratio)
+        if np.any(np.abs(ratio / median - 1.0) > RATIO_TOLERANCE):
+            warnings.append(
+                f"{source}: mode {m}: excitation ratios between successive levels are not "
+                f"constant ({ratio.min():.3g} to {ratio.max():.3g}, median {median:.3g})")
+    if np.median(zeta) > PERCENT_ZETA_MEDIAN:
+        warnings.insert(0, f"{source}: zeta median {np.median(zeta):.3g} > "
+                        f"{PERCENT_ZETA_MEDIAN}: is zeta in percent? it must be a fraction")
+
+    extra = {}
+    for name in header:
+        if name.startswith("x_"):
+            texts = [f[col[name]] for _, f in rows]
+            try:
+                extra[name] = np.array([float(t) for t in texts])
+            except ValueError:
+                extra[name] = np.array(texts, dtype=str)
+
+    return MeasuredData(level=level, excitation=excitation, omega2=omega2, zeta=zeta,
+                        mode=mode, run_order=run_order, response_amplitude=response,
+                        extra=extra, warnings=warnings, line=lines, source=source)
+
+
+def write_measured(path, data: MeasuredData) -> None:
+    """Write ``data`` as a measured-data CSV file (round-trips through read_measured).
+
+    Columns: level, excitation, omega2, zeta, mode, [response_amplitude,] run_order,
+    then the ``x_*`` annotations; floats with 17 significant digits (exact).
+    """
+    names = ["level", "excitation", "omega2", "zeta", "mode"]
+    cols = [data.level, data.excitation, data.omega2, data.zeta, data.mode]
+    if data.response_amplitude is not None:
+        names.append("response_amplitude")
+        cols.append(data.response_amplitude)
+    names.append("run_order")
+    cols.append(data.run_order)
+    for k, v in data.extra.items():
+        if not k.startswith("x_"):
+            raise ValueError(f"extra column {k!r} must start with 'x_'")
+        names.append(k)
+        cols.append(v)
+
+    def fmt(v):
+        if isinstance(v, (int, np.integer)):
+            return str(int(v))
+        if isinstance(v, (float, np.floating)):
+            return repr(float(v))
+        return str(v)
+
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(names)
+        for row in zip(*cols):
+            writer.writerow([fmt(v) for v in row])
+
+
+def summary(data: MeasuredData) -> str:
+    """Human-readable table: per mode, levels, excitation range, f_n and zeta ranges."""
+    out = [f"{data.source or '<memory>'}: {len(data)} rows, modes {', '.join(map(str, data.modes))}"]
+    for m in data.modes:
+        d = data.for_mode(m)
+        f = d.omega_hz
+        out.append(
+            f"  mode {m}: {len(d)} levels, excitation {d.excitation[0]:.4g} .. "
+            f"{d.excitation[-1]:.4g}, f_n {f[0]:.6g} .. {f[-1]:.6g} Hz, "
+            f"zeta {d.zeta[0]:.5g} .. {d.zeta[-1]:.5g}")
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m cases.measured FILE...``: validate, print summary and warnings."""
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv or argv[0] in ("-h", "--help"):
+        print("usage: python -m cases.measured FILE...\n"
+              "Validate measured-data CSV files (shared/spec/measured-data.md).")
+        return 0 if argv else 2
+    for name in argv:
+        try:
+            data = read_measured(name)
+        except (ValueError, OSError) as exc:
+            print(f"error: {exc}".splitlines()[0], file=sys.stderr)
+            return 2
+        print(summary(data))
+        for w in data.warnings:
+            print(f"warning: {w}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

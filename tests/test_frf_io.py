@@ -1,0 +1,129 @@
+"""FRF files: CSV and UFF 58 readers/writers (cases.frf_io)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cases.errors import InputError
+from cases.frf_io import FRFSet, read_frf, read_frf_csv, write_frf, write_frf_csv, write_frf_uff
+
+
+def random_set(n=41, points=("1+Z", "7+Z", "12-Y"), seed=0, **kw):
+    rng = np.random.default_rng(seed)
+    f = 20.0 + 0.5 * np.arange(n)
+    H = (rng.standard_normal((n, len(points))) + 1j * rng.standard_normal((n, len(points))))
+    return FRFSet(f, H * 10.0 ** rng.uniform(-8, -3, len(points)), list(points), **kw)
+
+
+def test_csv_round_trip_is_exact(tmp_path):
+    s = random_set(quantity="mobility", excitation=2.5, reference="1+Z")
+    p = tmp_path / "a.csv"
+    write_frf_csv(p, s)
+    r = read_frf(p)
+    np.testing.assert_array_equal(r.freq_hz, s.freq_hz)
+    np.testing.assert_array_equal(r.frf, s.frf)
+    assert (r.points, r.quantity, r.excitation, r.reference) == (
+        s.points, "mobility", 2.5, "1+Z")
+    text = p.read_text().splitlines()
+    assert text[3] == "freq_hz,re_1+Z,im_1+Z,re_7+Z,im_7+Z,re_12-Y,im_12-Y"
+
+
+def test_uff_round_trip(tmp_path):
+    s = random_set(quantity="accelerance", excitation=0.125, reference="3+X")
+    p = tmp_path / "a.uff"
+    write_frf_uff(p, s)
+    r = read_frf(p)
+    np.testing.assert_allclose(r.freq_hz, s.freq_hz, rtol=1e-12)
+    np.testing.assert_allclose(r.frf, s.frf, rtol=1e-11)      # 12 significant digits
+    assert (r.points, r.quantity, r.excitation, r.reference) == (
+        s.points, "accelerance", 0.125, "3+X")
+    # one data set 58 per point; the file is plain text
+    assert p.read_text().count("\n    58") == 3
+
+
+def test_uff_written_by_pyuff_directly(tmp_path):
+    """A file made with pyuff alone (uneven abscissa, one time series that is not an
+    FRF) reads as the FRFs it holds, abscissa to the format's 6 digits."""
+    import pyuff
+
+    rng = np.random.default_rng(1)
+    f = np.sort(rng.uniform(100.0, 200.0, 30))
+    H = rng.standard_normal((30, 2)) + 1j * rng.standard_normal((30, 2))
+    sets = [dict(type=58, func_type=1, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3,
+                 x=np.arange(30.0), data=rng.standard_normal(30), abscissa_spacing=1,
+                 id1="time", binary=0, orddenom_spec_data_type=0)]
+    for j, (node, d) in enumerate([(5, 2), (9, -3)]):
+        sets.append(dict(type=58, func_type=4, rsp_node=node, rsp_dir=d, ref_node=2,
+                         ref_dir=3, x=f, data=H[:, j], abscissa_spacing=0,
+                         ordinate_spec_data_type=12, orddenom_spec_data_type=13,
+                         id1="frf", id3="excitation = 4", binary=0))
+    p = tmp_path / "ext.unv"
+    pyuff.UFF(str(p)).write_sets(sets, mode="overwrite")
+    r = read_frf(p)
+    assert r.points == ["5+Y", "9-Z"] and r.reference == "2+Z"
+    assert r.quantity == "accelerance" and r.excitation == 4.0
+    np.testing.assert_allclose(r.freq_hz, f, rtol=5e-6)
+    np.testing.assert_allclose(r.frf, H, rtol=1e-10)
+
+
+def test_format_sniffed_without_extension(tmp_path):
+    s = random_set()
+    write_frf_uff(tmp_path / "x.uff", s)
+    write_frf_csv(tmp_path / "x.csv", s)
+    (tmp_path / "u").write_bytes((tmp_path / "x.uff").read_bytes())
+    (tmp_path / "c").write_bytes((tmp_path / "x.csv").read_bytes())
+    np.testing.assert_allclose(read_frf(tmp_path / "u").frf, s.frf, rtol=1e-11)
+    np.testing.assert_array_equal(read_frf(tmp_path / "c").frf, s.frf)
+    write_frf(tmp_path / "y.csv", s)
+    assert (tmp_path / "y.csv").read_text().startswith("freq_hz,")
+
+
+def _csv(tmp_path, text, name="e.csv"):
+    p = tmp_path / name
+    p.write_text(text)
+    with pytest.raises(InputError) as info:
+        read_frf_csv(p)
+    msg = str(info.value)
+    assert "\n" not in msg and msg.startswith(f"{p}:")
+    return msg[len(str(p)) + 1:]
+
+
+def test_csv_errors_name_line_and_column(tmp_path):
+    ok = "freq_hz,re_1,im_1\n10,1,2\n11,1,2\n"
+    assert _csv(tmp_path, "") == "1:1: empty file: expected a header line"
+    assert _csv(tmp_path, "freq,re_1,im_1\n10,1,2\n11,1,2\n") == \
+        "1:freq: first column must be 'freq_hz'"
+    assert _csv(tmp_path, "freq_hz,re_1,im_2\n10,1,2\n11,1,2\n") == \
+        "1:re_1: no matching column im_1"
+    assert _csv(tmp_path, "freq_hz,re_1,im_1,mag_1\n").startswith("1:mag_1: unknown column")
+    assert _csv(tmp_path, ok.replace("11,1,2", "11,x,2")) == "3:re_1: not a number: 'x'"
+    assert _csv(tmp_path, ok.replace("11,1,2", "11,1,nan")) == \
+        "3:im_1: not a finite number: 'nan'"
+    assert _csv(tmp_path, ok.replace("11,1,2", "10,1,2")) == \
+        "3:freq_hz: frequencies must be strictly increasing"
+    assert _csv(tmp_path, ok.replace("11,1,2", "11,1")) == "3:3: row has 2 fields, header has 3"
+    assert _csv(tmp_path, "# quantity = inertance\n" + ok).startswith(
+        "1:quantity: must be one of receptance, mobility, accelerance")
+    assert _csv(tmp_path, "# excitation = -1\n" + ok).startswith(
+        "1:excitation: excitation must be a finite number > 0")
+    assert _csv(tmp_path, "# level = 3\n" + ok).startswith("1:level: unknown key")
+    assert _csv(tmp_path, "\n# quantity = mobility\n" + ok.replace("10,1,2", "0,1,2")) == \
+        "4:freq_hz: frequency must be > 0 Hz, got 0"
+
+
+def test_uff_errors(tmp_path):
+    import pyuff
+
+    p = tmp_path / "bad.uff"
+    p.write_text("    -1\n    58\nthis is not a data set\n    -1\n")
+    with pytest.raises(InputError, match="bad.uff: "):
+        read_frf(p)
+    sets = [dict(type=58, func_type=4, rsp_node=k, rsp_dir=3, ref_node=k, ref_dir=3,
+                 x=np.arange(1.0, 11.0), data=np.ones(10, complex), abscissa_spacing=1,
+                 binary=0, orddenom_spec_data_type=13) for k in (1, 2)]
+    q = tmp_path / "two_refs.uff"
+    pyuff.UFF(str(q)).write_sets(sets, mode="overwrite")
+    with pytest.raises(InputError, match="2 references"):
+        read_frf(q)
+    with pytest.raises(InputError, match="no such file"):
+        read_frf(tmp_path / "none.uff")
