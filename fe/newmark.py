@@ -22,7 +22,13 @@ dt^2 K)`` reduces each step to ``n_joints`` nonlinear equations in the slips::
     h(s) = s - s_lin + (1+alpha) beta dt^2 Z g(s) = 0,   Z = G S^{-1} G^T,
 
 solved by Newton with the consistent tangent ``dg/ds = k_t - K_T`` from the return
-mapping. The joints' slider states are committed once the step has converged.
+mapping. The joints' slider states are committed once the step has converged. The
+compiled step loop calls :func:`joints.jenkins.bank_update_kernel`, so its joint
+forces and slider states are bitwise those of :func:`joints.jenkins.jenkins_update`
+for the same slips; it allocates nothing per step (measured with
+``benchmarks/bench_sdof.py``: about 0.2 us per step for one joint of 100 sliders, 10x
+the previous inlined loop and 100x a plain numpy step). :class:`NewmarkIntegrator`
+builds the step operators once for repeated runs.
 
 Energy balance (reported by :func:`integrate`): with ``Dq = q1 - q0``,
 ``input = sum Dq . (p0 + p1)/2``, ``viscous = sum Dq . C (v0 + v1)/2``,
@@ -41,9 +47,10 @@ import numpy as np
 from numba import njit
 
 from fe.reduction import JointBank, ReducedModel
-from joints.jenkins import jenkins_update
+from joints.jenkins import bank_update_kernel, jenkins_update
 
-__all__ = ["NewmarkSettings", "NewmarkState", "EnergyBalance", "NewmarkRun", "integrate"]
+__all__ = ["NewmarkSettings", "NewmarkState", "EnergyBalance", "NewmarkRun", "NewmarkIntegrator",
+           "integrate"]
 
 
 @dataclass(frozen=True)
@@ -126,14 +133,15 @@ class EnergyBalance:
 class NewmarkRun:
     """Result of :func:`integrate`: times ``t`` (n_steps+1,), reduced displacements
     ``q`` and velocities ``v`` (n_steps+1, r), slips (n_steps+1, n_joints), the final
-    state, the energy balance and the total number of Newton iterations."""
+    state, the energy balance (None if not asked for) and the total number of Newton
+    iterations."""
 
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
     slip: np.ndarray
     state: NewmarkState
-    energy: EnergyBalance
+    energy: EnergyBalance | None
     newton_iterations: int = 0
     joint_force: np.ndarray = field(default=None)
 
@@ -197,95 +205,295 @@ def _reference_loop(st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt,
     return qh, vh, sh, fh, x, g0, anchor, dissip, iters
 
 
+@njit(cache=True, inline="always")
+def _solve_in_place(J, h):
+    """Solve ``J d = h`` for a small dense ``J`` (n, n) by Gaussian elimination with
+    partial pivoting; ``J`` is destroyed and ``h`` overwritten by ``d``. Returns False
+    for a singular matrix."""
+    n = h.size
+    if n == 1:
+        if J[0, 0] == 0.0:
+            return False
+        h[0] = h[0] / J[0, 0]
+        return True
+    for c in range(n):
+        p = c
+        big = abs(J[c, c])
+        for r in range(c + 1, n):
+            if abs(J[r, c]) > big:
+                big = abs(J[r, c])
+                p = r
+        if big == 0.0:
+            return False
+        if p != c:
+            for cc in range(n):
+                tmp = J[c, cc]
+                J[c, cc] = J[p, cc]
+                J[p, cc] = tmp
+            tmp = h[c]
+            h[c] = h[p]
+            h[p] = tmp
+        for r in range(c + 1, n):
+            f = J[r, c] / J[c, c]
+            if f != 0.0:
+                for cc in range(c + 1, n):
+                    J[r, cc] -= f * J[c, cc]
+                h[r] -= f * h[c]
+    for c in range(n - 1, -1, -1):
+        acc = h[c]
+        for cc in range(c + 1, n):
+            acc -= J[c, cc] * h[cc]
+        h[c] = acc / J[c, c]
+    return True
+
+
 @njit(cache=True)
-def _march(B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, e, x0, g0, anchor0,
-           k, phi, K_T, tol, max_iter, slip_scale):
-    """Compiled step loop of :func:`integrate` (same algebra as :func:`_reference_loop`,
-    the return mapping of :func:`joints.jenkins.jenkins_update` inlined)."""
+def _march(BT, sl, G, YT, Z, cz, bdt2, al, dt, c_qa, c_va, ga_dt, e, x0, g0, anchor0,
+           k, phi, fric, K_T, tol, max_iter, slip_scale):
+    """Compiled step loop of :func:`integrate` (same algebra as :func:`_reference_loop`).
+
+    The joints' return mapping is :func:`joints.jenkins.bank_update_kernel`, so each
+    Newton iterate gives bitwise the forces of :func:`joints.jenkins.jenkins_update`.
+    No heap allocation inside the loop: the matrix-vector products are written as
+    loops over contiguous rows (``BT = B^T``, ``YT = Y^T``), which LLVM vectorizes, and
+    the ``n_joints`` x ``n_joints`` Newton system is solved by
+    :func:`_solve_in_place`. ``c_qa = dt^2 (1/2 - beta)``, ``c_va = dt (1 - gamma)``:
+    the predictors ``q~ = q + dt v + c_qa a``, ``v~ = v + c_va a``.
+    """
     n_steps = e.size - 1
     r = sl.size
     nj, ns = k.shape
     qh = np.empty((n_steps + 1, r))
     vh = np.empty((n_steps + 1, r))
     sh = np.empty((n_steps + 1, nj))
-    x = x0.copy()
+    x = x0.copy()                    # [q, v, a]
     g_old = g0.copy()
     anchor = anchor0.copy()
-    qh[0] = x[:r]
-    vh[0] = x[r:2 * r]
-    sh[0] = 0.0                      # filled by the caller
-    s = np.empty(nj)
-    g = np.empty(nj)
-    kt = np.empty(nj)
     trial = np.empty((nj, ns))
+    a_lin = np.empty(r)
+    u = np.empty(r)
+    s = np.empty(nj)
+    s_lin = np.empty(nj)
+    g = np.empty(nj)
+    F = np.empty(nj)
+    kt = np.empty(nj)
+    h = np.empty(nj)
+    J = np.empty((nj, nj))
+    for i in range(r):
+        qh[0, i] = x[i]
+        vh[0, i] = x[r + i]
+    for j in range(nj):
+        sh[0, j] = 0.0               # filled by the caller
     dissip = 0.0
     iters = 0
     status = -1
     for step in range(n_steps):
         ee = (1.0 + al) * e[step + 1] - al * e[step]
-        a_lin = B @ x + sl * ee
-        s_lin = GP @ x + bdt2 * (GB @ x + Gsl * ee)
+        # a_lin = B x + Sinv p ee (+ alpha Y g_old)
+        for i in range(r):
+            a_lin[i] = sl[i] * ee
+        for c in range(3 * r):
+            xc = x[c]
+            for i in range(r):
+                a_lin[i] += BT[c, i] * xc
         if al != 0.0:
-            a_lin = a_lin + al * (Y @ g_old)
-            s_lin = s_lin + al * bdt2 * (Z @ g_old)
-        s[:] = s_lin - cz * (Z @ g_old)
+            for j in range(nj):
+                w = al * g_old[j]
+                for i in range(r):
+                    a_lin[i] += YT[j, i] * w
+        # displacement if the joints kept their force: u = q~ + beta dt^2 a_lin
+        for i in range(r):
+            u[i] = x[i] + dt * x[r + i] + c_qa * x[2 * r + i] + bdt2 * a_lin[i]
+        for j in range(nj):
+            acc = 0.0
+            for i in range(r):
+                acc += G[j, i] * u[i]
+            s_lin[j] = acc
+        # predictor: the last joint force
+        for j in range(nj):
+            acc = 0.0
+            for l in range(nj):
+                acc += Z[j, l] * g_old[l]
+            s[j] = s_lin[j] - cz * acc
         converged = False
         for _ in range(max_iter):
             iters += 1
+            bank_update_kernel(s, anchor, k, phi, trial, F, kt)
             for j in range(nj):
-                F = 0.0
-                kk = 0.0
-                sj = s[j]
-                for i in range(ns):
-                    xi = anchor[j, i]
-                    xn = xi
-                    lo = sj - phi[j, i]
-                    hi = sj + phi[j, i]
-                    if xn < lo:
-                        xn = lo
-                    if xn > hi:
-                        xn = hi
-                    trial[j, i] = xn
-                    F += k[j, i] * (sj - xn)
-                    if xn == xi:
-                        kk += k[j, i]
-                g[j] = F - K_T[j] * sj
-                kt[j] = kk
-            h = s - s_lin + cz * (Z @ g)
+                g[j] = F[j] - K_T[j] * s[j]
             smax = 0.0
             hmax = 0.0
             for j in range(nj):
+                acc = 0.0
+                for l in range(nj):
+                    acc += Z[j, l] * g[l]
+                h[j] = s[j] - s_lin[j] + cz * acc
                 smax = max(smax, abs(s[j]))
                 hmax = max(hmax, abs(h[j]))
             if hmax <= tol * (smax + slip_scale):
                 converged = True
                 break
-            J = np.eye(nj) + cz * Z * (kt - K_T).reshape(1, nj)
-            s -= np.linalg.solve(J, h)
+            for j in range(nj):
+                for l in range(nj):
+                    J[j, l] = cz * Z[j, l] * (kt[l] - K_T[l])
+                J[j, j] += 1.0
+            if not _solve_in_place(J, h):
+                break
+            for j in range(nj):
+                s[j] -= h[j]
         if not converged:
             status = step
             break
         for j in range(nj):
+            dj = 0.0
             for i in range(ns):
-                dissip += k[j, i] * phi[j, i] * abs(trial[j, i] - anchor[j, i])
-                anchor[j, i] = trial[j, i]
-        a1 = a_lin - (1.0 + al) * (Y @ g)
-        q1 = P @ x + bdt2 * a1
-        v1 = Vp @ x + ga_dt * a1
-        x[:r] = q1
-        x[r:2 * r] = v1
-        x[2 * r:] = a1
-        g_old[:] = g
-        qh[step + 1] = q1
-        vh[step + 1] = v1
-        sh[step + 1] = s
+                dj += fric[j, i] * abs(trial[j, i] - anchor[j, i])
+            dissip += dj
+        anchor, trial = trial, anchor          # commit the sliders
+        # a1 = a_lin - (1 + alpha) Y g; q1 = q~ + beta dt^2 a1; v1 = v~ + gamma dt a1
+        for i in range(r):
+            u[i] = a_lin[i]
+        for j in range(nj):
+            w = (1.0 + al) * g[j]
+            for i in range(r):
+                u[i] -= YT[j, i] * w
+        for i in range(r):
+            a1 = u[i]
+            q1 = x[i] + dt * x[r + i] + c_qa * x[2 * r + i] + bdt2 * a1
+            v1 = x[r + i] + c_va * x[2 * r + i] + ga_dt * a1
+            x[i] = q1
+            x[r + i] = v1
+            x[2 * r + i] = a1
+            qh[step + 1, i] = q1
+            vh[step + 1, i] = v1
+        for j in range(nj):
+            g_old[j] = g[j]
+            sh[step + 1, j] = s[j]
     return qh, vh, sh, x, g_old, anchor, dissip, iters, status
+
+
+class NewmarkIntegrator:
+    """Step operators of the HHT/Newmark scheme for one model, joint bank and time
+    step, built once and reused by every :meth:`run` (a stepped-sine line integrates
+    period after period with the same operators).
+
+    Parameters
+    ----------
+    model : ReducedModel
+    bank : JointBank
+        Joint banks; ``bank.K_T`` must equal ``model.K_T``.
+    settings : NewmarkSettings
+    """
+
+    def __init__(self, model: ReducedModel, bank: JointBank, settings: NewmarkSettings):
+        K_T_bank = bank.K_T
+        if K_T_bank.shape != model.K_T.shape or np.any(
+                np.abs(K_T_bank - model.K_T) > 1e-9 * np.abs(model.K_T) + 1e-300):
+            raise ValueError("joint bank stiffness does not match the model's K_T")
+        self.model, self.bank, self.settings = model, bank, settings
+        dt, al = settings.dt, settings.alpha
+        be, ga = settings.beta, settings.gamma
+        M, C, K, G = model.M, model.C, model.K, model.G
+        S = M + (1.0 + al) * (ga * dt * C + be * dt * dt * K)
+        self.Sinv = Sinv = np.linalg.inv(S)
+        self.Y = Y = Sinv @ G.T                                   # (r, nj)
+        self.Z = G @ Y                                            # (nj, nj)
+        self.cz = (1.0 + al) * be * dt * dt
+        # a_lin = B @ [q; v; a] + Sinv load ((1+al) e1 - al e0) + al Y g0
+        A_q = -K
+        A_v = -C - (1.0 + al) * dt * K
+        A_a = -(1.0 + al) * (dt * (1.0 - ga) * C + dt * dt * (0.5 - be) * K)
+        self.B = np.ascontiguousarray(Sinv @ np.hstack([A_q, A_v, A_a]))   # (r, 3r)
+        c = np.ascontiguousarray
+        self._BT, self._YT, self._Zc = c(self.B.T), c(Y.T), c(self.Z)
+        self._G = c(G, dtype=float)
+        self._K_T = c(model.K_T, dtype=float)
+        self._k, self._phi = c(bank.stiffness), c(bank.slip_limit)
+        self._fric = c(bank.friction_force)
+        self.slip_scale = float(np.min(bank.slip_limit)) * 1e-3
+        self.bdt2, self.ga_dt = be * dt * dt, ga * dt
+        self._reference_ops = None
+
+    def _reference_operators(self):
+        if self._reference_ops is None:
+            r = self.model.n_reduced
+            dt, be, ga = self.settings.dt, self.settings.beta, self.settings.gamma
+            eye = np.eye(r)
+            P = np.hstack([eye, dt * eye, dt * dt * (0.5 - be) * eye])      # q~ = P x
+            Vp = np.hstack([np.zeros((r, r)), eye, dt * (1.0 - ga) * eye])  # v~ = Vp x
+            self._reference_ops = (P, Vp, self.model.G @ P, self.model.G @ self.B)
+        return self._reference_ops
+
+    def run(self, load, excitation, state: NewmarkState | None = None,
+            record_force: bool = False, compiled: bool = True,
+            energy: bool = True) -> NewmarkRun:
+        """Integrate ``len(excitation) - 1`` steps; see :func:`integrate`.
+
+        ``energy=False`` skips the energy balance (``NewmarkRun.energy`` is then None):
+        it costs ``O(n_steps r^2)``, as much as the steps themselves for a large
+        unreduced model."""
+        model, bank, settings = self.model, self.bank, self.settings
+        load = np.ascontiguousarray(load, dtype=float)
+        e = np.ascontiguousarray(excitation, dtype=float)
+        n_steps = e.size - 1
+        if n_steps < 1:
+            raise ValueError("need at least two excitation samples")
+        st = NewmarkState.rest(model, bank) if state is None else state.copy()
+        dt, al = settings.dt, settings.alpha
+        be, ga = settings.beta, settings.gamma
+        G, K_T = model.G, model.K_T
+        r = model.n_reduced
+        sl = self.Sinv @ load
+        if energy:
+            kin0, strain0, stored0 = _energies(model, bank, st.q, st.v, st.anchor)
+        if compiled and not record_force:
+            x0 = np.concatenate([st.q, st.v, st.a])
+            c = np.ascontiguousarray
+            qh, vh, sh, x, g_end, anchor, dissip, iters, status = _march(
+                self._BT, sl, self._G, self._YT, self._Zc, self.cz, self.bdt2, al, dt,
+                dt * dt * (0.5 - be), dt * (1.0 - ga), self.ga_dt, e, x0,
+                c(st.g, dtype=float), c(st.anchor, dtype=float), self._k, self._phi,
+                self._fric, self._K_T, settings.tol, settings.max_iter, self.slip_scale)
+            if status >= 0:
+                raise RuntimeError(f"Newton did not converge at step {status}")
+            sh[0] = G @ st.q
+            fh = None
+        else:
+            P, Vp, GP, GB = self._reference_operators()
+            qh, vh, sh, fh, x, g_end, anchor, dissip, iters = _reference_loop(
+                st, e, self.B, sl, GP, GB, G @ sl, P, Vp, self.Y, self.Z, self.cz,
+                self.bdt2, al, self.ga_dt, G, K_T, bank.stiffness, bank.slip_limit,
+                settings.tol, settings.max_iter, self.slip_scale, record_force,
+                bank.friction_force)
+        q1, v1 = x[:r], x[r:2 * r]
+        balance = None
+        if energy:   # vectorized over the history (matrix products, O(n r^2))
+            dq = np.diff(qh, axis=0)
+            vbar = 0.5 * (vh[1:] + vh[:-1])
+            ebar = 0.5 * (e[1:] + e[:-1])
+            w_in = float(np.dot(dq @ load, ebar))
+            w_visc = float(np.sum((dq @ model.C) * vbar))
+            kin1, strain1, stored1 = _energies(model, bank, q1, v1, anchor)
+            balance = EnergyBalance(input=w_in, viscous=w_visc,
+                                    joint_dissipation=float(dissip),
+                                    kinetic=float(kin1 - kin0),
+                                    strain=float(strain1 - strain0),
+                                    joint_stored=stored1 - stored0)
+        final = NewmarkState(t=st.t + n_steps * dt, q=q1.copy(), v=v1.copy(),
+                             a=x[2 * r:].copy(), anchor=anchor, g=np.array(g_end, dtype=float),
+                             e=float(e[-1]))
+        t = st.t + dt * np.arange(n_steps + 1)
+        return NewmarkRun(t=t, q=qh, v=vh, slip=sh, state=final, energy=balance,
+                          newton_iterations=int(iters), joint_force=fh)
 
 
 def integrate(model: ReducedModel, bank: JointBank, load, excitation, settings: NewmarkSettings,
               state: NewmarkState | None = None, record_force: bool = False,
               compiled: bool = True) -> NewmarkRun:
     """Integrate ``len(excitation) - 1`` steps of the HHT/Newmark scheme.
+
+    Builds a :class:`NewmarkIntegrator` (step operators) and runs it; to integrate
+    several stretches with the same model, bank and step, build the integrator once.
 
     Parameters
     ----------
@@ -303,72 +511,13 @@ def integrate(model: ReducedModel, bank: JointBank, load, excitation, settings: 
     record_force : bool
         Also return the joint forces ``F`` (n_steps+1, n_joints) (reference loop).
     compiled : bool
-        Compiled step loop (default) or the reference Python loop over
+        Compiled step loop (default; joints through
+        :func:`joints.jenkins.bank_update_kernel`) or the reference Python loop over
         :func:`joints.jenkins.jenkins_update` (same algebra; for tests).
 
     Returns
     -------
     NewmarkRun
     """
-    if not np.allclose(bank.K_T, model.K_T, rtol=1e-9):
-        raise ValueError("joint bank stiffness does not match the model's K_T")
-    load = np.ascontiguousarray(load, dtype=float)
-    e = np.ascontiguousarray(excitation, dtype=float)
-    n_steps = e.size - 1
-    if n_steps < 1:
-        raise ValueError("need at least two excitation samples")
-    st = NewmarkState.rest(model, bank) if state is None else state.copy()
-    dt, al = settings.dt, settings.alpha
-    be, ga = settings.beta, settings.gamma
-    M, C, K, G, K_T = model.M, model.C, model.K, model.G, model.K_T
-    r = model.n_reduced
-    S = M + (1.0 + al) * (ga * dt * C + be * dt * dt * K)
-    Sinv = np.linalg.inv(S)
-    Y = Sinv @ G.T                                        # (r, nj)
-    Z = G @ Y                                             # (nj, nj)
-    cz = (1.0 + al) * be * dt * dt
-    # a_lin = B @ [q; v; a] + Sinv load ((1+al) e1 - al e0) + al Y g0
-    A_q = -K
-    A_v = -C - (1.0 + al) * dt * K
-    A_a = -(1.0 + al) * (dt * (1.0 - ga) * C + dt * dt * (0.5 - be) * K)
-    B = np.ascontiguousarray(Sinv @ np.hstack([A_q, A_v, A_a]))     # (r, 3r)
-    sl = Sinv @ load
-    eye = np.eye(r)
-    P = np.hstack([eye, dt * eye, dt * dt * (0.5 - be) * eye])      # q~ = P x
-    Vp = np.hstack([np.zeros((r, r)), eye, dt * (1.0 - ga) * eye])  # v~ = Vp x
-    GP, GB, Gsl = G @ P, G @ B, G @ sl
-    k_sl, phi_sl = bank.stiffness, bank.slip_limit
-    kin0, strain0, stored0 = _energies(model, bank, st.q, st.v, st.anchor)
-    slip_scale = float(np.min(phi_sl)) * 1e-3
-    bdt2, ga_dt = be * dt * dt, ga * dt
-    if compiled and not record_force:
-        x0 = np.concatenate([st.q, st.v, st.a])
-        qh, vh, sh, x, g_end, anchor, dissip, iters, status = _march(
-            B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, e, x0,
-            np.asarray(st.g, dtype=float), np.ascontiguousarray(st.anchor), k_sl, phi_sl,
-            K_T, settings.tol, settings.max_iter, slip_scale)
-        if status >= 0:
-            raise RuntimeError(f"Newton did not converge at step {status}")
-        sh[0] = G @ st.q
-        fh = None
-    else:
-        qh, vh, sh, fh, x, g_end, anchor, dissip, iters = _reference_loop(
-            st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, G, K_T, k_sl,
-            phi_sl, settings.tol, settings.max_iter, slip_scale, record_force,
-            bank.friction_force)
-    # energy balance, vectorized over the history
-    dq = np.diff(qh, axis=0)
-    vbar = 0.5 * (vh[1:] + vh[:-1])
-    ebar = 0.5 * (e[1:] + e[:-1])
-    w_in = float(np.sum((dq @ load) * ebar))
-    w_visc = float(np.einsum("ki,ij,kj->", dq, C, vbar))
-    q1, v1 = x[:r], x[r:2 * r]
-    kin1, strain1, stored1 = _energies(model, bank, q1, v1, anchor)
-    energy = EnergyBalance(input=w_in, viscous=w_visc, joint_dissipation=float(dissip),
-                           kinetic=float(kin1 - kin0), strain=float(strain1 - strain0),
-                           joint_stored=stored1 - stored0)
-    final = NewmarkState(t=st.t + n_steps * dt, q=q1.copy(), v=v1.copy(), a=x[2 * r:].copy(),
-                         anchor=anchor, g=np.array(g_end, dtype=float), e=float(e[-1]))
-    t = st.t + dt * np.arange(n_steps + 1)
-    return NewmarkRun(t=t, q=qh, v=vh, slip=sh, state=final, energy=energy,
-                      newton_iterations=int(iters), joint_force=fh)
+    return NewmarkIntegrator(model, bank, settings).run(load, excitation, state,
+                                                        record_force, compiled)

@@ -41,6 +41,7 @@ __all__ = [
     "ReducedModel",
     "rayleigh_damping",
     "reduced_basis",
+    "full_model",
 ]
 
 
@@ -185,13 +186,14 @@ class ReducedModel:
     Attributes
     ----------
     basis : ndarray, shape (n, r)
-        ``Phi`` with ``Phi^T M Phi = I``.
+        ``Phi`` with ``Phi^T M Phi = I`` (the identity for :func:`full_model`).
     omega : ndarray, shape (r,)
         ``sqrt`` of the diagonal of ``Phi^T K_J Phi`` (rad/s): the stuck-joint natural
         frequencies (Ritz values when static joint modes are included).
     M, K, C : ndarray, shape (r, r)
         Reduced mass (identity), stuck-joint stiffness ``Phi^T K_J Phi`` (diagonal) and
-        damping ``Phi^T C Phi``.
+        damping ``Phi^T C Phi``; for :func:`full_model` the physical ``M``, ``K_J``,
+        ``C`` (the solvers take any symmetric ``M``, ``K``, ``C``).
     G : ndarray, shape (n_joints, r)
         Reduced slip operator: ``s = G q``.
     K_T : ndarray, shape (n_joints,)
@@ -292,3 +294,23 @@ def reduced_basis(system: JointedSystem, n_modes: int | None = None,
     Cr = 0.5 * (Cr + Cr.T)
     return ReducedModel(basis=phi, omega=omega, M=Mr, K=Kr, C=Cr, G=np.asarray(Gr),
                         K_T=system.K_T.copy(), n_modes=n_kept)
+
+
+def full_model(system: JointedSystem) -> ReducedModel:
+    """The unreduced model in the same form: basis = identity, physical coordinates.
+
+    ``M``, ``K = K_J`` and ``C`` are the structure's own matrices (dense), ``G`` the
+    physical slip operator; :mod:`fe.newmark` and :mod:`fe.harmonic_balance` then solve
+    the full equations of motion (paper eq. 23-25) with every DOF: the reference a
+    reduced basis is measured against. ``omega`` holds the stuck-joint natural
+    frequencies (rad/s) for information. Dense storage: for models of up to a few
+    thousand DOFs.
+    """
+    M = _dense(system.M)
+    K = _dense(system.K_J)
+    C = _dense(system.C)
+    n = system.n_dof
+    lam = la.eigh(K, M, eigvals_only=True)
+    return ReducedModel(basis=np.eye(n), omega=np.sqrt(np.clip(lam, 0.0, None)),
+                        M=0.5 * (M + M.T), K=0.5 * (K + K.T), C=0.5 * (C + C.T),
+                        G=np.asarray(_dense(system.G)), K_T=system.K_T.copy(), n_modes=n)

@@ -23,11 +23,13 @@ protocols:
   9 s of settling then a 1-s window in which the first harmonic is obtained by least
   squares (paper section 3, Table 1: half peak-to-peak in the last second).
 
-Each level starts from rest with virgin joints, so levels are independent: each
-finished level is written to ``level_XX.npz`` in the store directory with a
-``manifest.json`` holding the SHA-256 hash of every input (model, joints, lines,
-levels, protocol); a rerun with the same inputs loads the finished levels and computes
-only the missing ones, giving the same numbers as an uninterrupted run.
+Each level starts from rest with virgin joints, so levels are independent tasks of
+:func:`fe.executor.run_sweep` (serial, local processes or a dask.distributed cluster,
+bitwise the same numbers). Each finished level is written to ``level_XX.npz`` in the
+store directory as soon as it is done, with a ``manifest.json`` holding the SHA-256
+hash of every input (model, joints, lines, levels, protocol); a rerun with the same
+inputs loads the finished levels and computes only the missing ones, giving the same
+numbers as an uninterrupted run.
 
 SI units: Hz for line frequencies, N for force amplitudes, m for displacements.
 """
@@ -45,7 +47,8 @@ from typing import Callable
 import numpy as np
 
 from fe.harmonic_balance import HBSettings, continuation
-from fe.newmark import NewmarkSettings, NewmarkState, integrate
+from fe.executor import ExecutorSpec, run_sweep
+from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
 
 __all__ = [
@@ -241,13 +244,13 @@ def _newmark_level(model, bank, campaign, F, tick):
         if pr.prewarp:
             w = w * np.pi / (N * np.tan(np.pi / N))
         dt = 2 * np.pi / (w * N)
-        settings = NewmarkSettings(dt=dt, alpha=pr.alpha)
+        stepper = NewmarkIntegrator(model, bank, NewmarkSettings(dt=dt, alpha=pr.alpha))
         theta = phase + w * dt * k
         e = np.cos(theta)
         state.e = e[0]
         prev, d_hist = None, []
         for p in range(1, pr.max_periods + 1):
-            run = integrate(model, bank, load, e, settings, state)
+            run = stepper.run(load, e, state, energy=False)
             state = run.state
             z = np.concatenate([_first_harmonic(run.q[:-1] @ Bout.T, theta[:-1]),
                                 _first_harmonic(run.slip[:-1], theta[:-1])])
@@ -288,7 +291,7 @@ def _paper_level(model, bank, campaign, F, tick):
     for li, f_hz in enumerate(campaign.frequency_hz):
         w = 2 * np.pi * f_hz
         dt = 2 * np.pi / (w * N)
-        settings = NewmarkSettings(dt=dt, alpha=pr.alpha)
+        stepper = NewmarkIntegrator(model, bank, NewmarkSettings(dt=dt, alpha=pr.alpha))
         n_settle = int(round(pr.settle / dt))
         n_window = int(round(pr.window / dt))
         state = NewmarkState.rest(model, bank)
@@ -297,10 +300,10 @@ def _paper_level(model, bank, campaign, F, tick):
         while done < n_settle:                       # settle in 1-s chunks, keep nothing
             n = min(chunk, n_settle - done)
             e = np.cos(w * dt * np.arange(done, done + n + 1))
-            state = integrate(model, bank, load, e, settings, state).state
+            state = stepper.run(load, e, state, energy=False).state
             done += n
         e = np.cos(w * dt * np.arange(done, done + n_window + 1))
-        run = integrate(model, bank, load, e, settings, state)
+        run = stepper.run(load, e, state, energy=False)
         theta = w * run.t
         A = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
         Y = np.hstack([run.q @ Bout.T, run.slip])
@@ -329,9 +332,28 @@ def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: i
     return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)
 
 
-def _level_job(args):
-    model, bank, campaign, level = args
-    return level, run_level(model, bank, campaign, level)
+def _level_task(level: int, shared) -> LevelResult:
+    """One level as an executor task (module level: picklable by reference); ``shared``
+    is ``(model, bank, campaign)``, sent once per worker."""
+    model, bank, campaign = shared
+    return run_level(model, bank, campaign, level)
+
+
+def _executor_spec(executor, workers) -> ExecutorSpec:
+    """The :class:`~fe.executor.ExecutorSpec` of :func:`run_campaign`'s arguments."""
+    if workers is not None and (isinstance(workers, bool) or int(workers) != workers
+                                or workers < 1):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if isinstance(executor, ExecutorSpec):
+        if workers not in (None, 1):
+            raise ValueError("give the number of workers inside the ExecutorSpec")
+        return executor
+    if executor is None:
+        return ExecutorSpec("processes", int(workers)) if workers and workers > 1 \
+            else ExecutorSpec("serial")
+    if executor == "serial":
+        return ExecutorSpec("serial")
+    return ExecutorSpec(executor, workers)
 
 
 # --------------------------------------------------------------------------- campaign
@@ -345,29 +367,42 @@ def _write_manifest(store: Path, manifest: dict) -> None:
 
 def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
                  store: str | os.PathLike | None = None, progress: bool = True,
-                 workers: int = 1,
-                 on_level: Callable[[int, LevelResult], None] | None = None) -> CampaignResult:
+                 workers: int | None = None,
+                 on_level: Callable[[int, LevelResult], None] | None = None,
+                 executor: str | ExecutorSpec | None = None) -> CampaignResult:
     """Run (or resume) a campaign.
+
+    Levels are independent tasks of :func:`fe.executor.run_sweep`: computed serially,
+    in local processes or on a dask.distributed cluster, with bitwise the same results
+    (each level starts from rest; no random numbers).
 
     Parameters
     ----------
     model, bank, campaign
     store : path, optional
         Directory holding ``manifest.json`` and one ``level_XX.npz`` per finished
-        level. Finished levels of a campaign with the same hash are loaded, not
+        level, each written as soon as its level is done (whichever worker computed
+        it). Finished levels of a campaign with the same hash are loaded, not
         recomputed. A store holding another campaign raises ``ValueError``.
     progress : bool
-        tqdm progress bar on stderr (one tick per line).
-    workers : int
-        Levels computed in parallel processes (levels are independent).
+        tqdm progress bar on stderr (one tick per line when serial, per level
+        otherwise).
+    workers : int, optional
+        Without ``executor``: levels computed in that many local processes (1 or None:
+        serial). With ``executor="processes"`` or ``"dask"``: the pool size or the
+        number of workers of the local dask cluster started for the campaign.
     on_level : callable, optional
         Called as ``on_level(level, result)`` after each newly computed level has been
         stored (an exception raised there interrupts the campaign after the save).
+    executor : {"serial", "processes", "dask"} or fe.executor.ExecutorSpec, optional
+        Where the levels run; an :class:`~fe.executor.ExecutorSpec` can name an
+        existing dask scheduler (``ExecutorSpec("dask", scheduler="tcp://HOST:8786")``).
 
     Returns
     -------
     CampaignResult
     """
+    spec = _executor_spec(executor, workers)
     digest = campaign_hash(model, bank, campaign)
     n_levels, n_lines = campaign.force.size, campaign.frequency_hz.size
     results: dict[int, LevelResult] = {}
@@ -410,24 +445,23 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
         if on_level is not None:
             on_level(level, res)
 
+    if len(todo) <= 1 and spec.scheduler is None:   # nothing to share out: no pool
+        spec = ExecutorSpec("serial")
     bar = None
-    if progress and todo:
+    if progress and todo and spec.kind == "serial":
         from tqdm import tqdm
         bar = tqdm(total=len(todo) * n_lines, unit="line", desc=f"{campaign.protocol.name} campaign",
                    leave=False)
     try:
-        if workers > 1 and len(todo) > 1:
-            from concurrent.futures import ProcessPoolExecutor, as_completed
-            with ProcessPoolExecutor(max_workers=workers) as ex:
-                futs = [ex.submit(_level_job, (model, bank, campaign, lv)) for lv in todo]
-                for fut in as_completed(futs):
-                    lv, res = fut.result()
-                    finish(lv, res)
-                    if bar is not None:
-                        bar.update(n_lines)
+        if spec.kind == "serial":       # one tick per line
+            def func(level, shared):
+                return run_level(*shared, level, bar)
         else:
-            for lv in todo:
-                finish(lv, run_level(model, bank, campaign, lv, bar))
+            func = _level_task
+        run_sweep(func, todo, executor=spec, shared=(model, bank, campaign),
+                  progress=progress and spec.kind != "serial",
+                  desc=f"{campaign.protocol.name} campaign", unit="level", chunksize=1,
+                  on_result=lambda i, res: finish(todo[i], res))
     finally:
         if bar is not None:
             bar.close()

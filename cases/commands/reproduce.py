@@ -8,10 +8,21 @@ Targets:
   (Table 1), the chi fit of eq. 35 (Fig. 5) and the R errors of eq. 37 (Table 2) are
   printed beside the paper's values; then the improved method (simulated joint
   amplitudes, exact kappas, no modal decoupling; :func:`cases.lumped10.fit_improved`).
+* ``double-beam``: the FE double beam of paper section 4 with one Iwan element per glue
+  node (chi and R~ from the measured levels 1-7), driven through the paper's 10-level
+  stepped-sine campaign (5 mV .. 2.56 V); per-level frequency and damping identified
+  from the simulated FRFs; chi and R estimated by each method (paper, exact,
+  amplitude) from the measured levels 1-7 and levels 8-10 predicted; the same on the
+  simulated data; Tables 3-6 beside the paper's, measured vs simulated per level
+  (:mod:`cases.double_beam_reproduction`). Writes report.md, report.json,
+  simulated_measured.csv and PNGs under --out.
 """
 from __future__ import annotations
 
 import argparse
+import math
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -24,13 +35,19 @@ NAME = "reproduce"
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         NAME,
-        help="rerun a study of the paper (lumped: section 3) and compare with its tables",
+        help="rerun a study of the paper (lumped: section 3; double-beam: section 4) and "
+             "compare with its tables",
         description=(
             "Reproduce a study of the paper. 'lumped': the 10-DOF model of section 3 "
             "(eq. 38-40): stepped-sine FRFs at 12 force levels (Fig. 4), identified modes "
             "2, 4, 6, joint amplitudes at resonance (Table 1), the chi fit (Fig. 5, eq. 35) "
             "and R errors (Table 2, eq. 37) beside the paper's values, and the improved "
-            "method. The campaign is stored under --out and resumes after an interruption."),
+            "method. 'double-beam': the FE double beam of section 4 with Iwan glue joints "
+            "(chi, R~ from measured levels 1-7) through the 10-level stepped-sine campaign; "
+            "identified frequency and damping per level, chi and R per method on the "
+            "measured and the simulated data, predictions of levels 8-10, Tables 3-6 beside "
+            "the paper's, measured vs simulated per level (report.md, report.json, PNGs). "
+            "The campaign is stored under --out and resumes after an interruption."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     parser.add_argument("target", choices=sorted(TARGETS), help="study to reproduce")
@@ -49,6 +66,30 @@ def register(subparsers) -> None:
     parser.add_argument("--bands-only", action="store_true",
                         help="only the lines of the identification bands of modes 2, 4, 6")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    db = parser.add_argument_group("double-beam only")
+    db.add_argument("--data", default=argparse.SUPPRESS, metavar="FILE",
+                    help="measured-data CSV (default: the shipped paper data)")
+    db.add_argument("--fit-levels", default=argparse.SUPPRESS, metavar="LEVELS",
+                    help="levels of the chi fit (default 1-7); the others are predicted")
+    db.add_argument("--force-scale", type=float, default=argparse.SUPPRESS, metavar="N_PER_V",
+                    help="force per volt of drive (default 1; an assumption: R~ and phi_max "
+                         "scale with it, the simulated modal data do not)")
+    db.add_argument("--beta", type=float, default=argparse.SUPPRESS,
+                    help="Iwan beta of the glue joints (default 0: the largest phi_max)")
+    db.add_argument("--chi", type=float, default=argparse.SUPPRESS,
+                    help="joint chi instead of the estimate of the measured fit levels")
+    db.add_argument("--R", type=float, default=argparse.SUPPRESS, dest="R_joint",
+                    metavar="R",
+                    help="total glue R (N/m^(chi+2)) instead of the estimate's R~")
+    db.add_argument("--band", type=float, nargs=2, default=argparse.SUPPRESS,
+                    metavar=("LO", "HI"),
+                    help="stepped-sine lines and identification band, Hz (default 236 268)")
+    db.add_argument("--df", type=float, default=argparse.SUPPRESS, metavar="HZ",
+                    help="line spacing, Hz (default 0.5; the paper stepped 2 Hz)")
+    db.add_argument("--sliders-per-octave", type=int, default=argparse.SUPPRESS,
+                    help="Jenkins sliders per octave of slip limit (default 16)")
+    db.add_argument("--no-weak-joint-runs", action="store_true", default=argparse.SUPPRESS,
+                    help="skip the two reruns with R/10 and R/100 (estimator recovery)")
     parser.set_defaults(func=run)
 
 
@@ -105,11 +146,19 @@ def _lumped_text(rep, files) -> str:
     return "\n".join(lines)
 
 
+_DOUBLE_BEAM_ONLY = ("data", "fit_levels", "force_scale", "beta", "chi", "R_joint", "band", "df",
+                     "sliders_per_octave", "no_weak_joint_runs")
+
+
 def _run_lumped(args) -> int:
     from cases.commands.estimate import plot_estimate
     from cases.lumped10 import MODE_BANDS, LumpedStudy, run_study
     from viz.frf_plots import plot_damping_growth, plot_frf_levels
 
+    for name in _DOUBLE_BEAM_ONLY:
+        if getattr(args, name, None) is not None:
+            raise ValueError(f"--{name.replace('_joint', '').replace('_', '-')} applies to the "
+                             f"double-beam target only")
     if args.n_sliders < 2:
         raise ValueError(f"--n-sliders must be >= 2, got {args.n_sliders}")
     if args.workers < 1:
@@ -154,8 +203,107 @@ def _run_lumped(args) -> int:
     return 0
 
 
+def _double_beam_study(args):
+    from cases.double_beam_reproduction import DoubleBeamStudy
+
+    if args.protocol != "default":
+        raise ValueError("--protocol applies to the lumped target only (double-beam uses "
+                         "harmonic balance)")
+    if args.bands_only:
+        raise ValueError("--bands-only applies to the lumped target only")
+    if args.n_sliders != 100:
+        raise ValueError("--n-sliders applies to the lumped target only (double-beam: "
+                         "--sliders-per-octave)")
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    kw = {}
+    for name, key in (("data", "data_path"), ("fit_levels", "fit_levels"),
+                      ("force_scale", "force_scale"), ("beta", "beta"), ("chi", "chi"),
+                      ("R_joint", "R"), ("df", "df_hz"),
+                      ("sliders_per_octave", "sliders_per_octave")):
+        v = getattr(args, name, None)
+        if v is not None:
+            if isinstance(v, float) and not math.isfinite(v):
+                raise ValueError(f"--{name.replace('_joint', '').replace('_', '-')} must be "
+                                 f"finite, got {v}")
+            kw[key] = v
+    if getattr(args, "band", None) is not None:
+        kw["band_hz"] = tuple(args.band)
+    if getattr(args, "no_weak_joint_runs", False):
+        kw["weak_joint_scales"] = ()
+    if "data_path" in kw and not Path(kw["data_path"]).is_file():
+        raise ValueError(f"--data: no such file: {kw['data_path']}")
+    return DoubleBeamStudy(**kw)
+
+
+def _double_beam_text(rep, files, wall) -> str:
+    from cases.double_beam_reproduction import headline
+
+    lines = ["Double beam (paper section 4): FE model + Iwan glue joints, "
+             f"{rep.campaign.force.size} levels x {rep.campaign.frequency_hz.size} lines", ""]
+    lines += [f"- {s}" for s in headline(rep)]
+    lines.append("")
+    lines.append(" level  drive V   omega^2 meas   omega^2 sim     diff   zeta meas %  "
+                 "zeta sim %      diff %   slip/phi_max")
+    for r in rep.comparison():
+        lines.append(f" {r['level']:>4}{'*' if r['held_out'] else ' '} {r['excitation_V']:8.3f} "
+                     f"{r['measured_omega2']:13.1f} {r['simulated_omega2']:13.1f} "
+                     f"{r['omega2_difference']:+8.1f}   {100 * r['measured_zeta']:9.5f}  "
+                     f"{100 * r['simulated_zeta']:9.5f}  {100 * r['zeta_difference']:+9.5f}  "
+                     f"{r['slip_over_phi_max']:10.4f}")
+    lines.append("  (* = held out of the fit; diff = simulated - measured)")
+    lines.append("")
+    tab = rep.tables()
+    methods = list(tab["table3_delta_omega2"][0]["methods"]) if tab["table3_delta_omega2"] else []
+    lines.append("Held-out predictions (Tables 3 and 5), error % = 100 (pred - meas)/meas:")
+    head = "  levels   quantity          measured      paper(pub)  " + "  ".join(
+        f"{k:>18s}" for k in methods)
+    lines.append(head)
+    for t3, t5 in zip(tab["table3_delta_omega2"], tab["table5_delta_zeta_percent"]):
+        if not t3["held_out"]:
+            continue
+        for name, r, spec in (("loss omega^2", t3, "10.2f"), ("growth zeta %", t5, "10.3e")):
+            pub = r["paper"]["estimate"]
+            cells = []
+            for k in methods:
+                v, e = r["methods"][k]["value"], r["methods"][k]["error_percent"]
+                cells.append(f"{format(v, spec) if v is not None else 'nan':>10s} "
+                             f"({_fmt(e, '+.1f'):>6s})")
+            lines.append(f"  {t3['from_level']:>2}->{t3['to_level']:<3}  {name:14s} "
+                         f"{format(r['measured'], spec)}  "
+                         f"{format(pub, spec) if pub is not None else '       nan'}  "
+                         + "  ".join(cells))
+    lines.append("")
+    lines.append(f"Files ({Path(files[0]).parent}): " + ", ".join(Path(f).name for f in files))
+    lines.append(f"Wall time {wall:.1f} s (campaign {rep.timings['campaign']:.1f} s, "
+                 f"{int(rep.campaign.computed.sum())} of {rep.campaign.force.size} levels "
+                 f"computed; weak-joint reruns {rep.timings.get('weak_joint_runs', 0.0):.1f} s)")
+    return "\n".join(lines)
+
+
+def _run_double_beam(args) -> int:
+    from cases.double_beam_reproduction import run_study, write_report
+
+    t0 = time.perf_counter()
+    study = _double_beam_study(args)
+    out = Path(args.out or "results/double-beam")
+    out.mkdir(parents=True, exist_ok=True)
+    progress = not args.no_progress
+    if progress:
+        print(f"iwanfe reproduce double-beam: {study.n_levels} levels x {study.lines.size} "
+              f"lines, store {out}", file=sys.stderr)
+    rep = run_study(study, store=out, progress=progress, workers=args.workers)
+    files = write_report(rep, out, t0)
+    wall = time.perf_counter() - t0
+    if args.json:
+        print_json(rep.to_dict())
+    else:
+        print(_double_beam_text(rep, files, wall))
+    return 0
+
+
 #: positional targets of ``iwanfe reproduce``; each takes the parsed args.
-TARGETS = {"lumped": _run_lumped}
+TARGETS = {"lumped": _run_lumped, "double-beam": _run_double_beam}
 
 
 def run(args) -> int:
