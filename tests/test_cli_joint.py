@@ -115,3 +115,21 @@ def test_plot_hysteresis_draws_what_it_is_given(tmp_path):
     assert (tmp_path / "x.png").stat().st_size > 1000
     with pytest.raises(ValueError, match="2 loops"):
         plot_hysteresis(u, u, loops, ["a"])
+
+
+def test_repeated_amplitude_option_keeps_every_value():
+    """The issue's acceptance form: ``--amplitude 1e-4 --amplitude 1e-2`` (paper eq. 39 joint)."""
+    out = iwanfe("--chi", -0.5, "--kt", 1.1e5, "--fs", 400, "--beta", 4,
+                 "--amplitude", 1e-4, "--amplitude", 1e-2, "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert [r["amplitude"] for r in data["amplitudes"]] == [1e-4, 1e-2]
+    assert data["phi_max"] == pytest.approx(4.1958e-3, rel=1e-4)
+    assert data["R"] == pytest.approx(1.6982e5, rel=1e-4)
+    p = IwanParameters(-0.5, 1.1e5, 400.0, 4.0)
+    for r in data["amplitudes"]:
+        k_in, k_q = fourier_stiffness(p, r["amplitude"])
+        assert r["stiffness_in_phase"] == pytest.approx(k_in, rel=1e-8)
+        assert r["stiffness_quadrature"] == pytest.approx(k_q, rel=1e-8)
+        assert r["dissipation_per_cycle"] == pytest.approx(
+            math.pi * r["amplitude"] ** 2 * r["stiffness_quadrature"], rel=1e-12)
