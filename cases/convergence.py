@@ -151,30 +151,40 @@ def _measured_mode(model):
     return omega[i] / (2 * np.pi), model.glue_slip_participation(shapes[:, i])
 
 
+def _double_beam_mesh_case(cfg) -> dict:
+    """One mesh of :func:`double_beam_study` (module level: a task of
+    :func:`fe.executor.run_sweep`)."""
+    from cases.double_beam import build_double_beam
+
+    model = build_double_beam(cfg)
+    f, p = _measured_mode(model)
+    return {"element_size_m": cfg.element_size, "n_joints": cfg.n_joints,
+            "n_free_dofs": model.n_free, "frequency_hz": f, "glue_slip": p}
+
+
 def double_beam_study(element_sizes=DOUBLE_BEAM_ELEMENT_SIZES, joints=DOUBLE_BEAM_JOINTS,
-                      progress: bool = False) -> dict:
+                      progress: bool = False, executor=None) -> dict:
     """Measured-mode frequency and glue-slip participation under mesh refinement.
 
     The strip element size is refined with the default number of joints, and the number
     of joints with the default element size. ``relative_change`` is against the finest
-    mesh of each sweep.
+    mesh of each sweep. The meshes are independent tasks of
+    :func:`fe.executor.run_sweep` on ``executor`` (default serial; an
+    :class:`fe.executor.ExecutorSpec` or its kind); the results do not depend on it.
     """
-    from cases.double_beam import DoubleBeamConfig, build_double_beam
+    from cases.double_beam import DoubleBeamConfig
+    from fe.executor import run_sweep
 
     base = DoubleBeamConfig()
     cases = [("element_size", replace(base, element_size=s)) for s in element_sizes]
     cases += [("joints", replace(base, n_joints=n)) for n in joints]
     cases += [("default", base)]
-    if progress:
-        from tqdm import tqdm
-
-        cases = tqdm(cases, desc="double-beam meshes", leave=False)
+    rows = run_sweep(_double_beam_mesh_case, [cfg for _, cfg in cases],
+                     executor=executor or "serial", progress=progress,
+                     desc="double-beam meshes", unit="mesh", chunksize=1)
     out = {"element_size": [], "joints": [], "default": []}
-    for kind, cfg in cases:
-        model = build_double_beam(cfg)
-        f, p = _measured_mode(model)
-        out[kind].append({"element_size_m": cfg.element_size, "n_joints": cfg.n_joints,
-                          "n_free_dofs": model.n_free, "frequency_hz": f, "glue_slip": p})
+    for (kind, _), row in zip(cases, rows):
+        out[kind].append(row)
 
     def sweep(rows, key, h):
         f = np.array([r["frequency_hz"] for r in rows])
@@ -204,6 +214,8 @@ def double_beam_study(element_sizes=DOUBLE_BEAM_ELEMENT_SIZES, joints=DOUBLE_BEA
     }
 
 
-def convergence_report(progress: bool = False) -> dict:
-    """Both studies in one JSON-able dict (keys ``cantilever`` and ``double_beam``)."""
-    return {"cantilever": cantilever_study(), "double_beam": double_beam_study(progress=progress)}
+def convergence_report(progress: bool = False, executor=None) -> dict:
+    """Both studies in one JSON-able dict (keys ``cantilever`` and ``double_beam``);
+    ``executor`` runs the double-beam meshes (:func:`double_beam_study`)."""
+    return {"cantilever": cantilever_study(),
+            "double_beam": double_beam_study(progress=progress, executor=executor)}

@@ -56,15 +56,15 @@ returns zeta to 1e-10 relative on this grid and to 4e-6 on the paper's 2 Hz grid
 50-450 Hz; the whole run takes seconds, so the finer grid costs nothing.
 
 Jenkins discretization. The levels span a factor 512 in slip; :func:`log_spaced_bank`
-places ``sliders_per_octave`` sliders per octave of slip limit from ``phi_max`` down to
-``2^-octaves_below`` of the smallest level-1 joint amplitude (one more slider holds the
-rest of the density), each with the density's stiffness on its cell and, as slip
-limit, the density-weighted mean of the cell (exact first moment, so a fully slipping
-cell dissipates exactly). With 16 per octave (252 sliders per joint here) the
-micro-slip dissipation is within 6e-4 and the in-phase stiffness loss within 1e-4 of
+(:func:`joints.jenkins.discretize_log` per joint) places ``sliders_per_octave`` sliders
+per octave of slip limit from ``phi_max`` down to ``2^-octaves_below`` of the smallest
+level-1 joint amplitude (one more slider holds the rest of the density), each with the
+density's stiffness on its cell and, as slip limit, the density-weighted mean of the
+cell. With 16 per octave (252 sliders per joint here) the micro-slip dissipation is
+within 1e-3 (6.3e-4 at chi = -0.5) and the in-phase stiffness loss within 1.7e-4 of
 the exact four-parameter model (:func:`joints.iwan.describing_function`) from 1e-3
-``phi_max`` to ``phi_max``; the uniform discretization of :func:`joints.jenkins.discretize`
-needs about 2000 sliders for that at 1e-3 ``phi_max``.
+``phi_max`` to ``phi_max``, chi from -0.9 to -0.1; the uniform discretization of
+:func:`joints.jenkins.discretize` reaches 1.1e-3 there with 1000 sliders.
 
 Identification. LSCF + refinement (:func:`cases.identify.identify_modes`) of the
 receptance at the response DOF (Acc. 1, upper strip at the exciter) over the simulated
@@ -94,10 +94,10 @@ amplitudes at resonance), each with its R~. Reruns with ``R`` scaled by 0.1 and 
 (:func:`weak_joint_recovery`) show how the estimator's error depends on the joint's
 softening.
 
-Determinism. ARPACK (``eigsh``) starts from a random vector, so the modes of
-:func:`fe.modal.normal_modes` differ by ~1e-8 between calls of one process; R~ and the
-reduced basis would change the campaign hash and defeat the resumable store. All modes
-here come from the dense shift-invert solver (:class:`DenseModes`, :func:`ritz_basis`).
+Determinism. Every mode comes from :func:`fe.modal.normal_modes` (ARPACK with a fixed
+start vector, bitwise repeatable), the reduced basis from
+:func:`fe.reduction.reduced_basis`, so R~, the basis and the campaign hash are the same
+on every call of a process and a resumed campaign loads its finished levels.
 
 What the simulation shows (full run; the report has the numbers): the simulated damping
 growth is 1.5 times the measured one at level 7, the loss of omega^2 5.8 times (the
@@ -122,9 +122,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.linalg as la
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from cases.estimate import (
     DEFAULT_FORCE_SCALE,
@@ -138,8 +136,9 @@ from cases.estimate import (
 from cases.measured import MeasuredData, read_measured, write_measured
 from fe.harmonic_balance import HBSettings
 from fe.modal import normal_modes
-from fe.reduction import JointBank, ReducedModel
+from fe.reduction import JointBank, JointedSystem, ReducedModel, reduced_basis
 from joints.iwan import IwanParameters, kappa1
+from joints.jenkins import discretize_log
 
 __all__ = [
     "DoubleBeamStudy",
@@ -153,7 +152,6 @@ __all__ = [
     "log_spaced_bank",
     "phi_max_of",
     "joint_setup",
-    "DenseModes",
     "ritz_basis",
     "nonlinear_model",
     "identify_levels",
@@ -165,6 +163,7 @@ __all__ = [
     "assumption_statements",
     "markdown",
     "write_simulated_csv",
+    "write_frf_files",
     "write_report",
 ]
 
@@ -285,18 +284,12 @@ class DoubleBeamStudy:
 
 
 def log_spaced_bank(params, a_low: float, sliders_per_octave: int = 16) -> JointBank:
-    """Jenkins banks with slip limits spaced geometrically (one row per joint).
+    """Jenkins banks with slip limits spaced geometrically, one row per joint.
 
-    For each joint (``IwanParameters``, all with the same ``phi_max`` and ``chi``) the
-    continuous density ``R phi^chi`` on ``(0, phi_max)`` (paper eq. 6) is cut at
-    ``e_k = phi_max 2^(-k / n)``, ``k = 0 .. K``, ``K = ceil(n log2(phi_max/a_low))``,
-    plus the cell ``(0, e_K)``. Cell ``(a, b)`` becomes one slider of stiffness
-    ``int_a^b rho = (K_T - S) (x_b^(chi+1) - x_a^(chi+1))`` (``x = phi/phi_max``) and
-    slip limit the density-weighted mean ``int phi rho / int rho = phi_max (chi+1)/(chi+2)
-    (x_b^(chi+2) - x_a^(chi+2))/(x_b^(chi+1) - x_a^(chi+1))``; with ``S > 0`` one more
-    slider of stiffness ``S`` at ``phi_max`` (the Dirac term). The stiffnesses sum to
-    ``K_T`` (stuck stiffness unchanged). Below ``a_low`` the bank is resolved by one
-    slider only: keep the smallest amplitude of interest a few octaves above ``a_low``.
+    :func:`joints.jenkins.discretize_log` of every joint (``sliders_per_octave`` sliders
+    per octave of slip limit from ``phi_max`` down to ``a_low``, exact cell moments,
+    stiffnesses summing to ``K_T``; its docstring states the accuracy). The joints
+    share one slider grid, so they need the same ``phi_max`` and ``chi``.
 
     Parameters
     ----------
@@ -314,25 +307,8 @@ def log_spaced_bank(params, a_low: float, sliders_per_octave: int = 16) -> Joint
     pm, chi = params[0].phi_max, params[0].chi
     if any(not np.isclose(p.phi_max, pm, rtol=1e-12) or p.chi != chi for p in params):
         raise ValueError("log_spaced_bank: all joints need the same phi_max and chi")
-    if not 0 < a_low < pm:
-        raise ValueError(f"a_low must lie in (0, phi_max = {pm:.4g} m), got {a_low!r}")
-    n = int(sliders_per_octave)
-    if n < 1:
-        raise ValueError(f"sliders_per_octave must be >= 1, got {sliders_per_octave!r}")
-    K = int(math.ceil(n * math.log2(pm / a_low)))
-    x = np.concatenate([[0.0], 2.0 ** (-np.arange(K, -1, -1) / n)])
-    c = chi + 1.0
-    cum = np.diff(x ** c)
-    mean_x = c / (c + 1.0) * np.diff(x ** (c + 1.0)) / cum
-    rows_k, rows_phi = [], []
-    for p in params:
-        k = (p.K_T - p.S) * cum
-        phi = pm * mean_x
-        if p.S > 0:
-            k, phi = np.append(k, p.S), np.append(phi, pm)
-        rows_k.append(k)
-        rows_phi.append(phi)
-    return JointBank(np.array(rows_k), np.array(rows_phi))
+    return JointBank.from_discretizations(
+        discretize_log(p, a_low, sliders_per_octave) for p in params)
 
 
 @dataclass
@@ -437,75 +413,30 @@ def joint_setup(model, data: MeasuredData, study: DoubleBeamStudy) -> JointSetup
                       source=src, slip_level1_linear=np.asarray(src.case.slip_amplitudes))
 
 
-class DenseModes:
-    """The FE model with deterministic modes (proxy: every other attribute is the model's).
-
-    ``modes(n)`` uses the dense shift-invert solver of :func:`fe.modal.normal_modes`
-    (Cholesky + LAPACK ``eigh``), which returns the same bits on every call, instead of
-    ARPACK, whose random start vector moves the modes by ~1e-8 between calls of one
-    process (so R~ and the campaign hash would change between a run and its resume).
-    """
-
-    #: modes computed at once (and cached): every request slices this solution
-    N_CACHED = 40
-
-    def __init__(self, model):
-        self._model = model
-        self._modes = None
-
-    def __getattr__(self, name):
-        return getattr(self._model, name)
-
-    def modes(self, n_modes: int):
-        n = self._model.M.shape[0]
-        want = min(int(n_modes), n - 2)
-        if self._modes is None or self._modes[0].size < want:
-            size = max(want, min(self.N_CACHED, n - 2))
-            self._modes = normal_modes(self._model.K, self._model.M, size, dense_below=n + 1)
-        omega, shapes = self._modes
-        return omega[:want].copy(), shapes[:, :want].copy()
-
-
 def ritz_basis(model, n_modes: int, zeta: float) -> ReducedModel:
     """Reduced jointed model: stuck-glue modes + static joint modes, modal damping.
 
-    Same Ritz basis as :func:`fe.reduction.reduced_basis` with ``static_joint_modes``
+    The Ritz basis of :func:`fe.reduction.reduced_basis` with ``static_joint_modes``
     (``n_modes`` normal modes of ``(K_J, M)`` plus ``K_J^-1 G^T``, re-diagonalized so
-    that ``Phi^T M Phi = I``, ``Phi^T K_J Phi = diag(omega^2)``), computed with the
-    deterministic dense solver (see :class:`DenseModes`). Damping ``C_r = diag(2 zeta
-    omega_r)`` (modal damping, paper eq. 28 with one ratio for every vector).
+    that ``Phi^T M Phi = I``, ``Phi^T K_J Phi = diag(omega^2)``), with modal damping
+    ``C_r = diag(2 zeta omega_r)`` (paper eq. 28 with one ratio for every vector)
+    instead of a projected physical ``C``.
 
     Parameters
     ----------
-    model : DenseModes or cases.double_beam.DoubleBeamModel
-        ``K`` is the stuck-glue stiffness ``K_J``; ``slip_matrix`` is ``G``; its
-        ``modes`` must be deterministic (:class:`DenseModes`).
+    model : cases.double_beam.DoubleBeamModel
+        ``K_without_joints``, ``M``, ``slip_matrix`` (``G``), ``joint_stiffness``.
     n_modes : int
     zeta : float
         Modal damping ratio.
     """
-    K_J = sp.csc_matrix(model.K)
-    M = sp.csr_matrix(model.M)
-    G = np.asarray(sp.csr_matrix(model.slip_matrix).toarray())
-    _, phi = model.modes(int(n_modes))
-    psi = spla.splu(K_J).solve(G.T.copy())
-    psi = psi - phi @ ((M @ phi).T @ psi)
-    psi = psi / np.sqrt(np.einsum("ij,ij->j", psi, M @ psi))
-    V = np.hstack([phi, psi])
-    Mr, Kr = V.T @ (M @ V), V.T @ (K_J @ V)
-    s, U = la.eigh(0.5 * (Mr + Mr.T))
-    keep = s > 1e-12 * s.max()
-    T = U[:, keep] / np.sqrt(s[keep])
-    lam, W = la.eigh(T.T @ (0.5 * (Kr + Kr.T)) @ T)
-    basis = V @ (T @ W)
-    imax = np.argmax(np.abs(basis), axis=0)
-    basis = basis * np.sign(basis[imax, np.arange(basis.shape[1])])
-    omega = np.sqrt(np.clip(lam, 0.0, None))
-    r = basis.shape[1]
-    return ReducedModel(basis=basis, omega=omega, M=np.eye(r), K=np.diag(omega ** 2),
-                        C=np.diag(2.0 * zeta * omega), G=G @ basis,
-                        K_T=np.asarray(model.joint_stiffness, dtype=float).copy(),
-                        n_modes=int(n_modes))
+    n = model.M.shape[0]
+    system = JointedSystem(M=model.M, K=model.K_without_joints, C=sp.csr_matrix((n, n)),
+                           G=model.slip_matrix, K_T=model.joint_stiffness)
+    red = reduced_basis(system, n_modes=int(n_modes), static_joint_modes=True)
+    r, omega = red.n_reduced, red.omega
+    return dataclasses.replace(red, M=np.eye(r), K=np.diag(omega ** 2),
+                               C=np.diag(2.0 * zeta * omega))
 
 
 def nonlinear_model(model, setup: JointSetup, study: DoubleBeamStudy):
@@ -967,7 +898,7 @@ def assumption_statements(rep: "DoubleBeamReport") -> list[str]:
 
 
 def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: bool = True,
-              workers: int = 1, model=None) -> DoubleBeamReport:
+              workers: int = 1, model=None, executor=None) -> DoubleBeamReport:
     """Run the double-beam reproduction (module docstring).
 
     Parameters
@@ -979,9 +910,13 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     progress : bool
         tqdm bars on stderr.
     workers : int
-        Levels computed in parallel processes.
+        Without ``executor``: levels computed in that many local processes.
     model : cases.double_beam.DoubleBeamModel, optional
         Default: :func:`cases.double_beam.build_double_beam` (the shipped case).
+    executor : str or fe.executor.ExecutorSpec, optional
+        Where the levels run (:func:`fe.stepped_sine.run_campaign`); results are bitwise
+        the same. A local cluster or pool is started per campaign (one per weak-joint
+        rerun as well).
 
     Returns
     -------
@@ -993,7 +928,6 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     timings = {}
     t0 = time.perf_counter()
     model = build_double_beam() if model is None else model
-    model = model if isinstance(model, DenseModes) else DenseModes(model)
     data = measured_levels(study)
     setup = joint_setup(model, data, study)
     red, bank = nonlinear_model(model, setup, study)
@@ -1007,7 +941,8 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     if store is not None:
         store_dir = Path(store) / f"campaign-hb-{campaign_hash(red, bank, camp)[:12]}"
     t0 = time.perf_counter()
-    res = run_campaign(red, bank, camp, store=store_dir, progress=progress, workers=workers)
+    res = run_campaign(red, bank, camp, store=store_dir, progress=progress,
+                       workers=None if executor is not None else workers, executor=executor)
     timings["campaign"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -1061,7 +996,7 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     timings["estimation"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     weak = weak_joint_recovery(study, setup, store=store, progress=progress, workers=workers,
-                               model=model)
+                               model=model, executor=executor)
     timings["weak_joint_runs"] = time.perf_counter() - t0
     return DoubleBeamReport(study=study, setup=setup, measured=data, simulated=simulated,
                             campaign=res, identification=ident, modal_filter=mf,
@@ -1074,7 +1009,8 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
 
 
 def weak_joint_recovery(study: DoubleBeamStudy, setup: JointSetup, store=None,
-                        progress: bool = True, workers: int = 1, model=None) -> list[dict]:
+                        progress: bool = True, workers: int = 1, model=None,
+                        executor=None) -> list[dict]:
     """Rerun the simulation with ``R`` times each of ``study.weak_joint_scales``.
 
     The joint's relative softening at a given level scales with ``R`` (``kappa2
@@ -1087,7 +1023,8 @@ def weak_joint_recovery(study: DoubleBeamStudy, setup: JointSetup, store=None,
     rows = []
     for k in study.weak_joint_scales:
         sub = dataclasses.replace(study, chi=setup.chi, R=setup.R * k, weak_joint_scales=())
-        rep = run_study(sub, store=store, progress=progress, workers=workers, model=model)
+        rep = run_study(sub, store=store, progress=progress, workers=workers, model=model,
+                        executor=executor)
         c = rep.comparison()
         i7 = max(i for i, r in enumerate(c) if r["level"] in study.fit)
         mf = rep.modal_filter
@@ -1112,6 +1049,35 @@ def write_simulated_csv(rep: DoubleBeamReport, path) -> Path:
 
 
 # =========================================================================== markdown
+
+
+def write_frf_files(rep: DoubleBeamReport, out) -> list[Path]:
+    """The simulated receptance at the response DOF, one FRF CSV per level.
+
+    ``out/level_XX.csv`` (:func:`cases.frf_io.write_frf`, 17 significant digits) with
+    ``# quantity = receptance`` (m/N), ``# excitation = <drive V>`` and one point
+    ``acc1`` (Acc. 1, the response DOF), so that the simulated campaign goes through
+    the same identification as measured FRFs::
+
+        iwanfe identify results/double-beam/frf/level_*.csv --band 240 264 --out modal.csv
+
+    (``identify``'s default options differ from the study's, see the module docstring,
+    so its zeta agrees with ``simulated_measured.csv`` to about 1e-4 relative, not
+    bitwise.)
+    """
+    from cases.frf_io import FRFSet, write_frf
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    camp = rep.campaign
+    paths = []
+    for i, (level, volts) in enumerate(zip(rep.measured.level, rep.measured.excitation)):
+        path = out / f"level_{int(level):02d}.csv"
+        write_frf(path, FRFSet(camp.frequency_hz, camp.receptance[i, :, int(rep.response_dof)],
+                               points=["acc1"], quantity="receptance",
+                               excitation=float(volts), reference="drive"))
+        paths.append(path)
+    return paths
 
 
 def _f(x, spec=".4g") -> str:
@@ -1419,7 +1385,8 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
 
 
 def write_report(rep: DoubleBeamReport, out, t_start: float | None = None) -> list[Path]:
-    """Write figures, ``simulated_measured.csv``, ``report.json`` and ``report.md``.
+    """Write figures, ``simulated_measured.csv``, ``frf/level_XX.csv``
+    (:func:`write_frf_files`), ``report.json`` and ``report.md``.
 
     Parameters
     ----------
@@ -1479,6 +1446,7 @@ def write_report(rep: DoubleBeamReport, out, t_start: float | None = None) -> li
             files.append(path)
     path = write_simulated_csv(rep, out / "simulated_measured.csv")
     files.append(path)
+    files += write_frf_files(rep, out / "frf")
     files += [out / "report.json", out / "report.md"]
     rep.files = files
     wall = None if t_start is None else time.perf_counter() - t_start

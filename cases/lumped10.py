@@ -486,7 +486,7 @@ def _identify_level(freq, rec, band, target_hz):
 
 
 def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", store=None,
-              progress: bool = True, workers: int = 1) -> LumpedReport:
+              progress: bool = True, workers: int = 1, executor=None) -> LumpedReport:
     """Reproduce paper section 3 (Fig. 4, 5, Tables 1, 2) and the improved method.
 
     Parameters
@@ -500,8 +500,13 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
     store : path, optional
         Parent directory of the campaign store ``campaign-<protocol>-<hash12>``
         (resumable; see :func:`fe.stepped_sine.run_campaign`).
-    progress, workers
-        tqdm bars on stderr; levels computed in parallel processes.
+    progress : bool
+        tqdm bars on stderr.
+    workers : int
+        Without ``executor``: levels computed in that many local processes.
+    executor : str or fe.executor.ExecutorSpec, optional
+        Where the levels run (:func:`fe.stepped_sine.run_campaign`; e.g.
+        :func:`cases.executor_cli.executor_from_args`); results are bitwise the same.
     """
     import time as _time
 
@@ -532,7 +537,8 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
 
         from fe.stepped_sine import campaign_hash
         store = Path(store) / f"campaign-{proto.name}-{campaign_hash(model, bank, camp)[:12]}"
-    res = run_campaign(model, bank, camp, store=store, progress=progress, workers=workers)
+    res = run_campaign(model, bank, camp, store=store, progress=progress,
+                       workers=None if executor is not None else workers, executor=executor)
     timings["campaign"] = _time.perf_counter() - t0
     timings["campaign_levels_computed"] = int(res.computed.sum())
     timings["campaign_store"] = None if store is None else str(store)

@@ -17,8 +17,12 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+#: Seed of the fixed Lanczos start vector of :func:`normal_modes` (standard normal
+#: entries: generic, so no mode is missed by symmetry as with e.g. a vector of ones).
+START_SEED = 20050101
 
-def normal_modes(K, M, n_modes: int, sigma: float = -1.0, dense_below: int = 50):
+
+def normal_modes(K, M, n_modes: int, sigma: float = -1.0, dense_below: int = 1000):
     """Lowest ``n_modes`` undamped modes of ``K phi = omega^2 M phi``.
 
     Parameters
@@ -31,11 +35,19 @@ def normal_modes(K, M, n_modes: int, sigma: float = -1.0, dense_below: int = 50)
         Shift (rad^2/s^2) of the shift-invert Lanczos iteration
         (``scipy.sparse.linalg.eigsh(K, M=M, sigma=sigma)``); the modes nearest
         ``sigma`` are found. The default ``-1`` keeps ``K - sigma M`` positive definite
-        even with rigid-body modes.
+        even with rigid-body modes. The Lanczos start vector is a fixed generic vector
+        (:data:`START_SEED`), not ARPACK's random one, so repeated calls with the same
+        matrices return bitwise-identical modes (ARPACK's random start moves them by
+        ~1e-7 relative between calls, which would change every hash built on them).
     dense_below : int
         Models with fewer DOFs (or requests for more than ``n - 2`` modes) use a dense
         shift-invert: Cholesky factor ``L`` of ``K - sigma M`` and
         ``scipy.linalg.eigh`` of ``L^-1 M L^-T`` (eigenvalues ``1 / (lambda - sigma)``).
+        Below 1000 DOFs it costs < 0.1 s for 40 modes and is the more accurate path on
+        stiffly coupled models: on the 402-DOF double beam (glue springs 1e8 N/m) the
+        relative residual ``|K phi - lambda M phi| / |K phi|`` of modes 2-3 is 7e-8 /
+        1e-8 dense against 1e-6 / 7e-7 with ARPACK, whose mode shapes differ from the
+        dense ones by 2e-5 (enough to bias a modal filter). Both paths are deterministic.
 
     Returns
     -------
@@ -65,7 +77,8 @@ def normal_modes(K, M, n_modes: int, sigma: float = -1.0, dense_below: int = 50)
     else:
         Ks = sp.csc_matrix(K, dtype=float)
         Ms = sp.csc_matrix(M, dtype=float)
-        lam, phi = spla.eigsh(Ks, k=n_modes, M=Ms, sigma=sigma, which="LM")
+        v0 = np.random.default_rng(START_SEED).standard_normal(n)
+        lam, phi = spla.eigsh(Ks, k=n_modes, M=Ms, sigma=sigma, which="LM", v0=v0)
     order = np.argsort(lam)
     lam, phi = lam[order], phi[:, order]
     Mphi = M @ phi

@@ -140,7 +140,18 @@ class JointBank:
             if n_joints is None:
                 raise ValueError("n_joints is required with a single IwanParameters")
             params = [params] * int(n_joints)
-        discs = [discretize(p, n_sliders) for p in params]
+        return cls.from_discretizations([discretize(p, n_sliders) for p in params])
+
+    @classmethod
+    def from_discretizations(cls, discretizations) -> "JointBank":
+        """Bank from one :class:`joints.jenkins.JenkinsDiscretization` per joint (e.g.
+        :func:`joints.jenkins.discretize_log`); all must have the same number of sliders.
+        """
+        discs = list(discretizations)
+        sizes = {d.n_sliders for d in discs}
+        if len(sizes) != 1:
+            raise ValueError(f"every joint's discretization needs the same number of "
+                             f"sliders, got {sorted(sizes)}")
         return cls(np.array([d.stiffness for d in discs]), np.array([d.slip_limit for d in discs]))
 
     @property

@@ -39,8 +39,8 @@ import numpy as np
 
 from joints.iwan import IwanParameters
 
-__all__ = ["JenkinsDiscretization", "discretize", "jenkins_update", "jenkins_update_into",
-           "bank_update_kernel"]
+__all__ = ["JenkinsDiscretization", "discretize", "discretize_log", "jenkins_update",
+           "jenkins_update_into", "bank_update_kernel"]
 
 
 @dataclass(frozen=True)
@@ -97,6 +97,72 @@ def discretize(p: IwanParameters, n_sliders: int) -> JenkinsDiscretization:
     if with_dirac:
         phi = np.append(phi, p.phi_max)
         k = np.append(k, S)
+    return JenkinsDiscretization(stiffness=k, slip_limit=phi)
+
+
+def discretize_log(p: IwanParameters, a_low: float,
+                   sliders_per_octave: int = 16) -> JenkinsDiscretization:
+    """Discretize the Iwan density with slip limits spaced geometrically (per octave).
+
+    For responses whose slip amplitude spans decades (a stepped-sine campaign over a
+    factor 512 in force), the uniform-in-``s`` rule of :func:`discretize` wastes its
+    sliders near ``phi_max``: the error at amplitude ``A`` is set by the number of
+    sliders below ``A`` (module docstring). Here the continuous density ``R phi**chi``
+    on ``(0, phi_max)`` (paper eq. 6) is cut at ``e_k = phi_max 2**(-k/n)``, ``k = 0 ..
+    K``, ``K = ceil(n log2(phi_max / a_low))``, ``n = sliders_per_octave``, plus the cell
+    ``(0, e_K)``. Cell ``(a, b)`` becomes one slider of stiffness ``int_a^b rho = (K_T -
+    S) (x_b**(chi+1) - x_a**(chi+1))`` (``x = phi / phi_max``) and slip limit the
+    density-weighted mean ``phi_max (chi+1)/(chi+2) (x_b**(chi+2) - x_a**(chi+2)) /
+    (x_b**(chi+1) - x_a**(chi+1))`` (exact zeroth and first moments of every cell, so
+    the saturated force ``sum k_i phi_i`` is ``F_S`` to rounding). With ``S > 0`` one more
+    slider of stiffness ``S`` at ``phi_max`` carries the Dirac term. The stiffnesses sum
+    to ``K_T`` to rounding (the telescoping cell sums), so the stuck stiffness is not
+    shifted.
+
+    Accuracy (closed-form describing function of each slider against
+    :func:`joints.iwan.dissipation_per_cycle` and :func:`joints.iwan.describing_function`,
+    amplitudes ``A`` from 1e-3 ``phi_max`` to ``phi_max`` with ``a_low = 2**-6 1e-3
+    phi_max``, chi from -0.9 to -0.1, beta = 0 and 4; ``tests/test_jenkins.py``): the
+    largest relative error of the dissipation per cycle and of the in-phase stiffness
+    loss ``K_T - k_in`` is 3.9e-3 / 7.4e-4 with 8 sliders per octave, 9.9e-4 / 1.7e-4
+    with 16 (6.3e-4 / 7.4e-5 at chi = -0.5; 257 sliders) and 2.4e-4 / 8.1e-5 with 32:
+    second order in the cell width for chi >= -0.5, larger for chi near 0 (near chi =
+    -1 the one slider below ``a_low`` holds a large share, (a_low/phi_max)**(chi+1), and
+    limits the gain). In macro-slip (``A`` = 1 to
+    4 ``phi_max``, chi = -0.5, 16 per octave) the errors stay below 2.4e-4 / 1.1e-4.
+    The uniform :func:`discretize` reaches 1.1e-3 over the same range with 1000 sliders
+    and 1.4e-4 with 2000. Below ``a_low`` the bank is resolved by one slider only: keep
+    the smallest amplitude of interest a few octaves (6 above) over ``a_low``.
+
+    Parameters
+    ----------
+    p : IwanParameters
+    a_low : float
+        Lowest resolved slip limit (m), ``0 < a_low < phi_max``.
+    sliders_per_octave : int
+        >= 1.
+
+    Returns
+    -------
+    JenkinsDiscretization
+        ``K + 1`` sliders (``K + 2`` with ``S > 0``), slip limits ascending.
+    """
+    pm = p.phi_max
+    if not (isinstance(a_low, (int, float, np.floating)) and 0 < a_low < pm):
+        raise ValueError(f"a_low must lie in (0, phi_max = {pm:.4g} m), got {a_low!r}")
+    n = int(sliders_per_octave)
+    if n != sliders_per_octave or n < 1:
+        raise ValueError(f"sliders_per_octave must be an integer >= 1, got "
+                         f"{sliders_per_octave!r}")
+    n_cuts = int(np.ceil(n * np.log2(pm / a_low)))
+    x = np.concatenate([[0.0], 2.0 ** (-np.arange(n_cuts, -1, -1) / n)])
+    c = p.chi + 1.0
+    cell = np.diff(x ** c)                                   # share of K_T - S per cell
+    mean_x = c / (c + 1.0) * np.diff(x ** (c + 1.0)) / cell  # density-weighted mean
+    k = (p.K_T - p.S) * cell
+    phi = pm * mean_x
+    if p.S > 0.0:
+        k, phi = np.append(k, p.S), np.append(phi, pm)
     return JenkinsDiscretization(stiffness=k, slip_limit=phi)
 
 

@@ -14,7 +14,7 @@ from joints.iwan import (
     dissipation_per_cycle,
     force_history,
 )
-from joints.jenkins import JenkinsDiscretization, discretize, jenkins_update
+from joints.jenkins import JenkinsDiscretization, discretize, discretize_log, jenkins_update
 
 PAPER = IwanParameters(chi=-0.5, K_T=1.1e5, F_S=400.0, beta=4.0)
 params = st.builds(
@@ -195,3 +195,90 @@ def test_low_amplitude_error_rule(chi):
         D = np.where(phi < A[:, None], 4 * phi * (A[:, None] - phi), 0.0) @ d.stiffness
         err = np.max(np.abs(D / dissipation_per_cycle(p, A) - 1))
         assert 0.2 < err * m_target**2 < 2.0
+
+
+# ----------------------------------------------------------------- discretize_log
+
+
+def jenkins_first_harmonic(d, A):
+    """Closed-form first harmonic of a Jenkins bank under slip ``A sin(wt)`` (steady
+    cycle; Caughey 1960, bilinear hysteresis with zero post-slip stiffness): per slider
+    with ``phi < A``, ``k_in = k/pi (t - sin(2t)/2)``, ``cos t = 1 - 2 phi/A``, and
+    dissipation ``4 k phi (A - phi)``; stuck sliders give ``k`` and nothing."""
+    k, phi = d.stiffness[:, None], d.slip_limit[:, None]
+    A = np.atleast_1d(A)[None, :]
+    slipping = phi < A
+    t = np.arccos(1.0 - 2.0 * np.where(slipping, phi / A, 1.0))
+    k_in = np.where(slipping, k / np.pi * (t - 0.5 * np.sin(2 * t)), k).sum(axis=0)
+    D = np.where(slipping, 4 * k * phi * (A - phi), 0.0).sum(axis=0)
+    return k_in, D
+
+
+def test_closed_form_jenkins_harmonic_matches_simulated_cycle():
+    """The closed form used below against a simulated steady cycle of three sliders."""
+    d = JenkinsDiscretization(stiffness=np.array([1e5, 2e5, 5e4]),
+                              slip_limit=np.array([1e-6, 3e-6, 8e-6]))
+    n, A = 4000, 5e-6
+    theta = np.linspace(0.0, 4 * np.pi, 2 * n + 1)
+    F, _ = simulate(d, A * np.sin(theta))
+    th, Fc = theta[n:-1], F[n:-1, 0]
+    k_in, D = jenkins_first_harmonic(d, A)
+    # periodic trapezoid sums over a cycle with kinks: O(h^2), 1e-8 here
+    assert 2 * np.mean(Fc * np.sin(th)) / A == pytest.approx(k_in[0], rel=1e-7)
+    assert np.pi * A * 2 * np.mean(Fc * np.cos(th)) == pytest.approx(D[0], rel=1e-7)
+
+
+@settings(max_examples=50, deadline=None)
+@given(params, st.integers(1, 40), st.floats(1e-8, 0.9))
+def test_log_discretization_contract(p, n, frac):
+    """Stiffnesses sum to K_T, sum k phi = F_S (exact cell moments), K + 1 (+1) sliders."""
+    a_low = frac * p.phi_max
+    d = discretize_log(p, a_low, n)
+    n_cuts = math.ceil(n * math.log2(1.0 / frac))
+    assert d.n_sliders == n_cuts + 1 + (p.S > 0)
+    assert d.stiffness.sum() == pytest.approx(p.K_T, rel=1e-13)
+    assert np.dot(d.stiffness, d.slip_limit) == pytest.approx(p.F_S, rel=1e-12)
+    assert np.all(d.stiffness >= 0) and np.all(np.diff(d.slip_limit) > 0)
+    assert d.slip_limit[-1] <= p.phi_max * (1 + 1e-15)
+    if n_cuts:   # the second slider is the first resolved cell, just above a_low
+        assert a_low * 2 ** (-1.0 / n) * (1 - 1e-12) <= d.slip_limit[1] <= 2 * a_low
+
+
+@pytest.mark.parametrize("chi, beta", [(-0.9, 0.0), (-0.5, 0.0), (-0.5, 4.0), (-0.1, 0.0)])
+def test_log_discretization_accuracy_over_three_decades(chi, beta):
+    """Docstring numbers: dissipation and in-phase stiffness loss against the exact
+    four-parameter model from 1e-3 phi_max to phi_max (a_low 6 octaves lower), 16 and 32
+    sliders per octave; the error falls as (cell width)^2; macro-slip up to 4 phi_max."""
+    p = IwanParameters(chi=chi, K_T=2.5e7, F_S=20.0, beta=beta)
+    A = p.phi_max * np.logspace(-3, 0, 61)
+    e_in, _ = describing_function(p, A)
+    D_exact = dissipation_per_cycle(p, A)
+    err = {}
+    for n in (16, 32):
+        k_in, D = jenkins_first_harmonic(discretize_log(p, 1e-3 * p.phi_max / 64, n), A)
+        err[n] = (np.max(np.abs(D / D_exact - 1)), np.max(np.abs(k_in - e_in) / (p.K_T - e_in)))
+    assert err[16][0] < 1.0e-3 and err[16][1] < 1.8e-4
+    assert err[32][0] < 2.5e-4 and err[32][1] < 8.5e-5
+    if chi >= -0.5:   # second order (near chi = -1 the lumped cell below a_low dominates)
+        assert 3.5 < err[16][0] / err[32][0] < 4.5
+    if chi == -0.5:
+        assert err[16][0] < 6.5e-4 and err[16][1] < 7.5e-5
+        # macro-slip: the continuous part saturates, the cell moments hold it
+        A = p.phi_max * np.array([1.0, 1.5, 2.0, 4.0])
+        k_in, D = jenkins_first_harmonic(discretize_log(p, 1e-3 * p.phi_max / 64, 16), A)
+        assert np.max(np.abs(D / dissipation_per_cycle(p, A) - 1)) < 2.5e-4
+        np.testing.assert_allclose(k_in, describing_function(p, A)[0], rtol=1.2e-4)
+        # the uniform rule with as many sliders (257) is far worse at 1e-3 phi_max
+        d_u = discretize(p, discretize_log(p, 1e-3 * p.phi_max / 64, 16).n_sliders)
+        A = p.phi_max * 1e-3
+        _, D_u = jenkins_first_harmonic(d_u, A)
+        assert abs(D_u[0] / dissipation_per_cycle(p, A) - 1) > 5 * err[16][0]
+
+
+def test_log_discretization_rejects_bad_input():
+    with pytest.raises(ValueError, match="a_low"):
+        discretize_log(PAPER, 2 * PAPER.phi_max, 8)
+    with pytest.raises(ValueError, match="a_low"):
+        discretize_log(PAPER, 0.0, 8)
+    with pytest.raises(ValueError, match="sliders_per_octave"):
+        discretize_log(PAPER, 1e-3 * PAPER.phi_max, 0)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cases.executor_cli import add_executor_arguments, executor_from_args
 from cases.jsonio import print_json, to_jsonable
 
 
@@ -28,6 +29,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", default=None, metavar="DIR",
                    help="write convergence.json, convergence.txt and convergence.png here")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_executor_arguments(p)     # where the double-beam meshes run
     p.set_defaults(func=run)
 
 
@@ -73,7 +75,8 @@ def format_table(report: dict) -> str:
 def run(args) -> int:
     from cases.convergence import convergence_report
 
-    report = convergence_report()  # ~1 s: no progress bar
+    executor = executor_from_args(args)
+    report = convergence_report(executor=executor)  # ~1 s serial: no progress bar
     table = format_table(report)
     if args.out:
         from viz.convergence_plot import plot_convergence

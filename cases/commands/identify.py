@@ -49,6 +49,11 @@ def register(subparsers) -> None:
                              "the files)")
     parser.add_argument("--max-order", type=int, default=None,
                         help="highest LSCF model order (default from the data)")
+    parser.add_argument("--weighting", choices=("auto", "relative", "uniform"), default="auto",
+                        help="weights of the maximum-likelihood refinement (default auto: a "
+                             "noise model fitted to the residuals)")
+    parser.add_argument("--no-pseudo-modes", dest="pseudo_modes", action="store_false",
+                        help="no pseudo-modes below/above the band in the refinement")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--plot", metavar="FILE.png", default=None,
                         help="stabilization diagram (several FILEs: FILE-<level>.png)")
@@ -99,7 +104,8 @@ def run(args) -> int:
             raise ValueError(f"{files[k]} holds {s.quantity}, --quantity says {args.quantity}")
         try:
             res = identify(s.freq_hz, s.frf, band=args.band, n_modes=args.modes,
-                           quantity=quantity, max_order=args.max_order)
+                           quantity=quantity, max_order=args.max_order,
+                           weighting=args.weighting, pseudo_modes=args.pseudo_modes)
         except ValueError as exc:
             raise ValueError(f"{files[k]}: {exc}") from None
         results.append((s, quantity, res))

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cases.executor_cli import add_executor_arguments, executor_from_args
 from cases.jsonio import print_json
 
 NAME = "reproduce"
@@ -61,11 +62,10 @@ def register(subparsers) -> None:
                              "paper: Newmark 9 s + 1 s per line from rest (hours)")
     parser.add_argument("--n-sliders", type=int, default=100,
                         help="Jenkins elements per Iwan joint")
-    parser.add_argument("--workers", type=int, default=1,
-                        help="force levels computed in parallel processes")
     parser.add_argument("--bands-only", action="store_true",
                         help="only the lines of the identification bands of modes 2, 4, 6")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_executor_arguments(parser)     # --workers/--scheduler/--executor: where levels run
     db = parser.add_argument_group("double-beam only")
     db.add_argument("--data", default=argparse.SUPPRESS, metavar="FILE",
                     help="measured-data CSV (default: the shipped paper data)")
@@ -161,13 +161,12 @@ def _run_lumped(args) -> int:
                              f"double-beam target only")
     if args.n_sliders < 2:
         raise ValueError(f"--n-sliders must be >= 2, got {args.n_sliders}")
-    if args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    executor = executor_from_args(args)
     out = Path(args.out or "results/lumped")
     out.mkdir(parents=True, exist_ok=True)
     study = LumpedStudy(n_sliders=args.n_sliders, bands_only=args.bands_only)
     rep = run_study(study, protocol=args.protocol, store=out, progress=not args.no_progress,
-                    workers=args.workers)
+                    executor=executor)
     files = []
     camp = rep.campaign
     fig4 = out / "fig4_frf_levels.png"
@@ -214,8 +213,6 @@ def _double_beam_study(args):
     if args.n_sliders != 100:
         raise ValueError("--n-sliders applies to the lumped target only (double-beam: "
                          "--sliders-per-octave)")
-    if args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
     kw = {}
     for name, key in (("data", "data_path"), ("fit_levels", "fit_levels"),
                       ("force_scale", "force_scale"), ("beta", "beta"), ("chi", "chi"),
@@ -286,13 +283,14 @@ def _run_double_beam(args) -> int:
 
     t0 = time.perf_counter()
     study = _double_beam_study(args)
+    executor = executor_from_args(args)
     out = Path(args.out or "results/double-beam")
     out.mkdir(parents=True, exist_ok=True)
     progress = not args.no_progress
     if progress:
         print(f"iwanfe reproduce double-beam: {study.n_levels} levels x {study.lines.size} "
               f"lines, store {out}", file=sys.stderr)
-    rep = run_study(study, store=out, progress=progress, workers=args.workers)
+    rep = run_study(study, store=out, progress=progress, executor=executor)
     files = write_report(rep, out, t0)
     wall = time.perf_counter() - t0
     if args.json:
