@@ -55,10 +55,17 @@ def register(subparsers) -> None:
 
 
 def load(file: str | None, case: str | None):
-    """The MeasuredData to diagnose, and the hidden truth for synthetic cases."""
-    if (file is None) == (case is None):
-        raise InputError("give either FILE or --case NAME")
+    """The MeasuredData to diagnose, and the hidden truth for synthetic cases.
+
+    ``FILE`` alone, ``--case`` alone (its shipped data or a synthetic case), or ``FILE``
+    with a model case (``--case double-beam``: the file's data, the case's FE check).
+    """
+    if file is None and case is None:
+        raise InputError("give FILE, --case NAME, or both (FILE with a model case)")
     if file is not None:
+        if case is not None and case not in SHIPPED:
+            raise InputError(f"--case {case!r} with FILE: the case must be a model "
+                             f"({', '.join(SHIPPED)})")
         return read_measured(file), None
     if case in SHIPPED:
         return read_measured(SHIPPED[case]), None
@@ -114,6 +121,10 @@ def format_text(result: dict, source: str) -> str:
         t = r["synthetic_truth"]
         lines.append(f"synthetic truth: cause {t['cause']}, effect size "
                      f"{t['effect_size']:.3g}, chi {t['chi']:.3f}")
+    if "fe_check" in r:
+        from cases.fe_check import format_fe_check
+
+        lines.extend(format_fe_check(r["fe_check"]))
     return "\n".join(lines)
 
 
@@ -204,6 +215,10 @@ in units of the noise level (grey band: +/- 2).
 
 {warn}
 """
+    if "fe_check" in r:
+        from cases.fe_check import format_fe_check_md
+
+        md += "\n" + format_fe_check_md(r["fe_check"])
     report = out / "report.md"
     report.write_text(md, encoding="utf-8")
     return [report, json_path, fits_png, ev_png]
@@ -215,6 +230,11 @@ def run(args) -> int:
     result = diagnose(data, mode=args.mode, cv_all=args.cv_all)
     if truth is not None:
         result["synthetic_truth"] = truth
+    if args.case == "double-beam":
+        from cases.fe_check import double_beam_fe_check
+
+        level1 = data.for_mode(result["mode"]) if "mode" in result else data
+        result["fe_check"] = double_beam_fe_check(measured_omega2=float(level1.omega2[0]))
     if args.out:
         write_report(result, Path(args.out), Path(source).name if args.file else source)
     if args.json:
