@@ -28,9 +28,7 @@ import time
 import numpy as np
 
 from cases.identify import identify_modes
-from cases.lumped10 import (MODE_BANDS, LumpedStudy, force_levels, force_vector,
-                            lumped10_bank, lumped10_system)
-from fe.reduction import reduced_basis
+from cases.lumped10 import MODE_BANDS, LumpedStudy, lumped10_setup
 from fe.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
                              run_campaign)
 
@@ -42,12 +40,9 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     study = LumpedStudy(n_sliders=args.n_sliders)
-    p = study.params
-    system = lumped10_system(p)
-    bank = lumped10_bank(p, study.n_sliders)
-    model = reduced_basis(system)
-    load = force_vector(p)
-    F = force_levels(p)
+    setup = lumped10_setup(study)
+    system, bank, model, load, F = (setup.system, setup.bank, setup.model, setup.load,
+                                    setup.levels)
     lines = study.lines
     outputs = np.arange(system.n_dof)
 

@@ -37,7 +37,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares as _least_squares
 
-from fe.reduction import JointBank, JointedSystem, rayleigh_damping
+from fe.reduction import (JointBank, JointedSystem, ReducedModel, rayleigh_damping,
+                          reduced_basis)
 from joints.iwan import IwanParameters
 
 __all__ = [
@@ -256,6 +257,26 @@ class LumpedStudy:
                 keep |= (f >= lo) & (f <= hi)
             f = f[keep]
         return f
+
+
+@dataclass(frozen=True)
+class LumpedSetup:
+    """The study's solver inputs: jointed system, Jenkins banks, reduced model, unit load
+    pattern (N) and force levels (N)."""
+
+    system: JointedSystem
+    bank: JointBank
+    model: ReducedModel
+    load: np.ndarray
+    levels: np.ndarray
+
+
+def lumped10_setup(study: "LumpedStudy") -> LumpedSetup:
+    """Build everything a campaign on the 10-DOF model needs (paper eq. 38-40)."""
+    p = study.params
+    system = lumped10_system(p)
+    return LumpedSetup(system, lumped10_bank(p, study.n_sliders), reduced_basis(system),
+                       force_vector(p), force_levels(p))
 
 
 def modal_inverse_receptance(receptance, shape, M, load) -> np.ndarray:
@@ -512,7 +533,6 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
 
     from cases.estimate import b_tilde, estimate, kappa1_per_R, r_tilde
     from cases.measured import MeasuredData
-    from fe.reduction import reduced_basis
     from fe.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
                                  run_campaign, run_level)
 
@@ -522,11 +542,9 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
         raise ValueError(f"unknown protocol {protocol!r} (choose default, newmark or paper)")
     proto = protocols[protocol]
     p = study.params
-    system = lumped10_system(p)
-    bank = lumped10_bank(p, study.n_sliders)
-    model = reduced_basis(system)
-    load = force_vector(p)
-    F = force_levels(p)
+    setup = lumped10_setup(study)
+    system, bank, model, load, F = (setup.system, setup.bank, setup.model, setup.load,
+                                    setup.levels)
     freq = study.lines
     topo = mode_topology(system)
     timings = {}
