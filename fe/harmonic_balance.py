@@ -23,7 +23,7 @@ which the slider last slipped (its anchor is ``s_m -+ phi_i``), so
 ``k_t = sum_stuck k_i`` on the diagonal plus the anchor terms. Physical response
 harmonics follow as ``Q_h = D_h^{-1} (p delta_{h1} - G^T N_h)``. The compiled march
 runs the Jenkins return mapping through :func:`joints.jenkins.bank_update_kernel`
-(bitwise the forces of :func:`joints.jenkins.jenkins_update`) and sums the Jacobian
+(the kernel of :func:`joints.jenkins.jenkins_update`, one joint row per call) and sums the Jacobian
 rows by groups of sliders that last slipped at the same sample.
 
 :func:`solve_hb_exact` is the first-harmonic balance with the *continuous* Iwan

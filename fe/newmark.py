@@ -25,7 +25,7 @@ solved by Newton with the consistent tangent ``dg/ds = k_t - K_T`` from the retu
 mapping. The joints' slider states are committed once the step has converged. The
 compiled step loop calls :func:`joints.jenkins.bank_update_kernel`, so its joint
 forces and slider states are bitwise those of :func:`joints.jenkins.jenkins_update`
-for the same slips; it allocates nothing per step (measured with
+on the same bank for the same slips; it allocates nothing per step (measured with
 ``benchmarks/bench_sdof.py``: about 0.2 us per step for one joint of 100 sliders, 10x
 the previous inlined loop and 100x a plain numpy step). :class:`NewmarkIntegrator`
 builds the step operators once for repeated runs.

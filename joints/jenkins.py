@@ -22,14 +22,10 @@ of sliders that slip at that amplitude, c = 0.5 (chi = -0.2) to 1.2 (chi = -0.5)
 
 State update: :func:`jenkins_update` (pure) and :func:`jenkins_update_into` (in place)
 run the compiled kernel :func:`bank_update_kernel`, which compiled solvers may call
-from their own ``@njit`` step loops. It is bitwise equal to the plain numpy update
-(:func:`_jenkins_update_numpy`; numpy's pairwise summation order is replayed in 8-wide
-SIMD lanes). Measured with ``benchmarks/bench_jenkins.py`` (one thread, AMD EPYC, CPU
-time medians on a shared 2-core machine): 3.7e9-4.4e9 slider updates/s inside a
-compiled loop for banks of 1e3-1e5 sliders (about 30 ns + 0.25 ns per slider per call,
-10 ns fixed per joint), 10-16x the straightforward numpy update at those sizes and
-40-150x for banks of 100-1000 sliders; a Python-level call costs about 2.5 us plus
-the kernel time (numpy: 8-12 us for 2 x 100).
+from their own ``@njit`` step loops: a plain loop over each joint's sliders that LLVM
+vectorizes. Anchors are bitwise those of the numpy update; force and tangent sums agree
+with it to summation rounding (SIMD partial sums instead of numpy's pairwise order).
+Throughput and cost model: ``benchmarks/README.md`` (``bench_jenkins.py``).
 """
 from __future__ import annotations
 
@@ -168,21 +164,21 @@ def discretize_log(p: IwanParameters, a_low: float,
 
 # ------------------------------------------------------------------ state update
 #
-# One definition, two implementations. For each joint j and slider i::
+# For each joint j and slider i (paper eq. 2 over one step, a return mapping)::
 #
-#     x_new = minimum(maximum(x, s - phi), s + phi)      (numpy NaN/tie semantics)
-#     force_j   = pairwise_sum_i( (s - x_new) * k )
-#     tangent_j = pairwise_sum_i( k if x_new == x else 0.0 )
+#     x_new     = clamp(x, s - phi, s + phi)      (x if s - phi < x < s + phi)
+#     force_j   = sum_i (s - x_new) k
+#     tangent_j = sum_i (k if x_new == x else 0)
 #
-# ``pairwise_sum`` is numpy's summation along a contiguous axis (``np.sum(a, axis=-1)``
-# on a C-contiguous array: ``+0.0 + pairwise(a)``, with blocks of <= 128 terms summed
-# in 8 interleaved accumulators and longer runs halved recursively). The compiled
-# kernel replays that order term by term, so the two implementations agree bit for bit
-# (tests/test_jenkins_kernel.py), signed zeros, ties, infinities and NaN slips or
-# anchors included. The one exception is a NaN in ``slip_limit`` (never produced by
-# :func:`discretize`): the kernel then leaves that slider where it was.
-
-_PAIRWISE_BLOCK = 128  # numpy's PW_BLOCKSIZE
+# The compiled kernel is a plain loop over the sliders of each joint that LLVM
+# vectorizes (AVX-512 / AVX2). Its sums are reassociated into SIMD partial sums, so
+# they may differ from numpy's pairwise ``np.sum`` in the last bits (within the
+# summation error bound (n - 1) eps sum|terms|, Higham 2002 eq. 4.6; tests); the
+# anchors involve no sum and are bitwise those of the numpy reference. For a given
+# machine the order is fixed: every call, every executor, in place or not, gives
+# bitwise the same numbers. Non-finite input: a NaN anchor stays NaN; an infinite
+# slip gives NaN force as in numpy; a NaN slip (or limit) gives NaN force but, unlike
+# numpy, leaves the anchors where they were (and counts them stuck).
 
 
 def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
@@ -192,240 +188,51 @@ def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
     anchor_new = np.maximum(anchor, col - slip_limit)
     np.minimum(anchor_new, col + slip_limit, out=anchor_new)
     stuck = anchor_new == anchor
-    terms = np.ascontiguousarray((col - anchor_new) * stiffness)
-    force = np.sum(terms, axis=-1)
-    tangent = np.sum(np.ascontiguousarray(np.where(stuck, stiffness, 0.0)), axis=-1)
+    force = np.sum((col - anchor_new) * stiffness, axis=-1)
+    tangent = np.sum(np.where(stuck, stiffness, 0.0), axis=-1)
     return force, tangent, anchor_new
 
 
 try:  # the compiled kernel; numpy fallback if numba is missing
-    from llvmlite import ir as _ir
-    from numba import carray as _carray, njit, types as _nbtypes
-    from numba.core import cgutils as _cgutils
-    from numba.extending import intrinsic as _intrinsic
+    from numba import njit
 except ImportError:  # pragma: no cover - numba is a declared dependency
     njit = None
 
-_LANES = 8  # numpy's pairwise_sum keeps 8 interleaved accumulators
+# Reassociation lets LLVM split each joint's two sums into SIMD partial sums (the only
+# floating-point liberty taken: no FMA contraction, no NaN/inf assumptions).
+_REDUCTION_MATH = {"reassoc", "nsz"}
 
 if njit is not None:
 
-    def _make_slide_blocks(nan_exact):
-        """Build the vector intrinsic ``f(s, x, phi, k, out, ix, ip, ik, n_blocks)``.
-
-        It runs the return mapping of ``n_blocks`` blocks of 8 sliders as 8-wide
-        vector IR (one SIMD register on AVX-512, two on AVX2) on C-contiguous arrays
-        indexed flat: anchors ``x[ix + i]``, limits ``phi[ip + i]``, stiffnesses
-        ``k[ik + i]`` for ``i < 8 n_blocks``, trial positions written to
-        ``out[ix + i]``. It returns the 8 force and the 8 tangent
-        accumulators of numpy's pairwise sum (lane ``m`` adds terms ``m, 8 + m, ...``
-        in order, from -0.0, the exact additive identity). No fast-math flags: every
-        lane rounds exactly as the scalar numpy operations do.
-
-        ``nan_exact=False`` clamps with one unordered compare per bound (``x`` if
-        ``x > lo`` or unordered, then ``y`` if ``y < hi`` or unordered): NaN anchors
-        propagate and ties give the bound, as in numpy, but a NaN bound (NaN slip or
-        limit, inf - inf) would be ignored. ``nan_exact=True`` reproduces
-        ``np.maximum``/``np.minimum`` for every input (two more compares per bound);
-        the kernel uses it for joints whose slip is not finite.
-        """
-
-        @_intrinsic
-        def slide_blocks(typingctx, s, x, phi, k, out, ix, ip, ik, n_blocks):
-            ok = all(isinstance(a, _nbtypes.Array) and a.dtype == _nbtypes.float64
-                     and a.layout == "C" for a in (x, phi, k, out))
-            if not ok or s != _nbtypes.float64 or not out.mutable:
-                return None
-            intp = _nbtypes.intp
-            sig = _nbtypes.UniTuple(_nbtypes.float64, 2 * _LANES)(
-                s, x, phi, k, out, intp, intp, intp, intp)
-
-            def codegen(context, builder, signature, args):
-                s_v, x_v, phi_v, k_v, out_v, ix_v, ip_v, ik_v, nb_v = args
-                vty = _ir.VectorType(_ir.DoubleType(), _LANES)
-                i32 = _ir.IntType(32)
-                px, pphi, pk, pout = (context.make_array(t)(context, builder, v).data
-                                      for t, v in zip(signature.args[1:5], args[1:5]))
-                sv = _ir.Constant(vty, _ir.Undefined)
-                for m in range(_LANES):
-                    sv = builder.insert_element(sv, s_v, _ir.Constant(i32, m))
-                negzero = _ir.Constant(vty, [-0.0] * _LANES)
-                zero = _ir.Constant(vty, [0.0] * _LANES)
-                ity = ix_v.type
-                entry = builder.basic_block
-                head = builder.append_basic_block("blocks.head")
-                body = builder.append_basic_block("blocks.body")
-                done = builder.append_basic_block("blocks.done")
-                builder.branch(head)
-                builder.position_at_end(head)
-                ib = builder.phi(ity)
-                f_acc = builder.phi(vty)
-                t_acc = builder.phi(vty)
-                ib.add_incoming(_ir.Constant(ity, 0), entry)
-                f_acc.add_incoming(negzero, entry)
-                t_acc.add_incoming(negzero, entry)
-                builder.cbranch(builder.icmp_signed("<", ib, nb_v), body, done)
-                builder.position_at_end(body)
-                step = builder.mul(ib, _ir.Constant(ity, _LANES))
-
-                def at(ptr, base):
-                    elem = builder.gep(ptr, [builder.add(base, step)])
-                    return builder.bitcast(elem, vty.as_pointer())
-
-                xv = builder.load(at(px, ix_v), align=8)
-                phiv = builder.load(at(pphi, ip_v), align=8)
-                kv = builder.load(at(pk, ik_v), align=8)
-                lo_b = builder.fsub(sv, phiv)
-                hi_b = builder.fadd(sv, phiv)
-                # np.maximum(x, lo) then np.minimum(., hi): the first operand if it
-                # wins or is NaN, else the second (ties give the second operand)
-                if nan_exact:
-                    keep = builder.or_(builder.fcmp_ordered(">", xv, lo_b),
-                                       builder.fcmp_unordered("uno", xv, xv))
-                    y = builder.select(keep, xv, lo_b)
-                    keep = builder.or_(builder.fcmp_ordered("<", y, hi_b),
-                                       builder.fcmp_unordered("uno", y, y))
-                    y = builder.select(keep, y, hi_b)
-                else:
-                    y = builder.select(builder.fcmp_unordered(">", xv, lo_b), xv, lo_b)
-                    y = builder.select(builder.fcmp_unordered("<", y, hi_b), y, hi_b)
-                builder.store(y, at(pout, ix_v), align=8)
-                f_new = builder.fadd(f_acc, builder.fmul(builder.fsub(sv, y), kv))
-                stuck_k = builder.select(builder.fcmp_ordered("==", y, xv), kv, zero)
-                t_new = builder.fadd(t_acc, stuck_k)
-                i_next = builder.add(ib, _ir.Constant(ity, 1))
-                latch = builder.basic_block
-                builder.branch(head)
-                ib.add_incoming(i_next, latch)
-                f_acc.add_incoming(f_new, latch)
-                t_acc.add_incoming(t_new, latch)
-                builder.position_at_end(done)
-                lanes = [builder.extract_element(f_acc, _ir.Constant(i32, m))
-                         for m in range(_LANES)]
-                lanes += [builder.extract_element(t_acc, _ir.Constant(i32, m))
-                          for m in range(_LANES)]
-                return context.make_tuple(builder, signature.return_type, lanes)
-
-            return sig, codegen
-
-        return slide_blocks
-
-    _slide_blocks = _make_slide_blocks(False)
-    _slide_blocks_exact = _make_slide_blocks(True)
-
-    @njit(cache=True, inline="always")
-    def _slide(s, x, p):
-        """One slider's return mapping, ``np.minimum(np.maximum(x, s - p), s + p)``."""
-        lo = s - p
-        hi = s + p
-        xn = x if ((x > lo) | (x != x)) else lo
-        return xn if ((xn < hi) | (xn != xn)) else hi
-
-    def _make_stack_buffer(nbtype, size):
-        """Intrinsic returning a pointer to ``size`` items of stack memory in the
-        calling function's frame (no heap allocation, no reference counting)."""
-
-        @_intrinsic
-        def stack_buffer(typingctx):
-            def codegen(context, builder, signature, args):
-                return _cgutils.alloca_once(builder, context.get_value_type(nbtype),
-                                            size=size)
-
-            return _nbtypes.CPointer(nbtype)(), codegen
-
-        return stack_buffer
-
-    _STACK = 64          # pairwise recursion depth bound (n < 128 * 2**63)
-    _stack_int64 = _make_stack_buffer(_nbtypes.int64, 3 * _STACK)
-    _stack_float64 = _make_stack_buffer(_nbtypes.float64, 2 * _STACK)
-
-    @njit(cache=True, inline="always")
-    def _leaf(s, x, phi, k, out, j, rp, rk, lo, n, nan_exact):
-        """Sliders ``lo .. lo+n-1`` (n <= 128) of joint ``j`` (rows ``rp`` of ``phi``,
-        ``rk`` of ``k``): trial positions into ``out`` and (force, tangent) summed as
-        numpy sums a block (``res = 0.; res += a`` below 8 terms; else 8 interleaved
-        accumulators combined pairwise, then the tail)."""
-        if n < _LANES:
-            fs = 0.0
-            ts = 0.0
-            for i in range(lo, lo + n):
-                xi = x[j, i]
-                xn = _slide(s, xi, phi[rp, i])
-                out[j, i] = xn
-                fs += (s - xn) * k[rk, i]
-                ts += k[rk, i] if xn == xi else 0.0
-            return fs, ts
-        nb = n // _LANES
-        width = x.shape[1]
-        if nan_exact:
-            r = _slide_blocks_exact(s, x, phi, k, out, j * width + lo, rp * width + lo,
-                                    rk * width + lo, nb)
-        else:
-            r = _slide_blocks(s, x, phi, k, out, j * width + lo, rp * width + lo,
-                              rk * width + lo, nb)
-        fs = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
-        ts = ((r[8] + r[9]) + (r[10] + r[11])) + ((r[12] + r[13]) + (r[14] + r[15]))
-        for i in range(lo + nb * _LANES, lo + n):
+    @njit(cache=True, fastmath=_REDUCTION_MATH, inline="always")
+    def _row_in_place(s, x, j, k, rk, phi, rp):
+        """Return mapping of joint ``j``'s sliders, committed into ``x[j]``; returns
+        (force, tangent). One array read and written at the same index, so LLVM
+        vectorizes it without a run-time overlap check; the only row loop, so every
+        caller gets the same summation order."""
+        f = 0.0
+        t = 0.0
+        for i in range(x.shape[1]):
             xi = x[j, i]
-            xn = _slide(s, xi, phi[rp, i])
-            out[j, i] = xn
-            fs += (s - xn) * k[rk, i]
-            ts += k[rk, i] if xn == xi else 0.0
-        return fs, ts
+            p = phi[rp, i]
+            lo = s - p
+            hi = s + p
+            y = lo if xi <= lo else xi      # NaN anchors stay NaN, ties give the limit
+            y = hi if y >= hi else y
+            x[j, i] = y
+            f += (s - y) * k[rk, i]
+            t += k[rk, i] if y == xi else 0.0
+        return f, t
 
-    @njit(cache=True, inline="always")
-    def _row(s, x, phi, k, out, j, rp, rk, frames, values):
-        """All sliders of joint ``j``, summed in numpy's pairwise order: runs of <= 128
-        terms are leaves, a longer run is split at ``n//2 - (n//2) % 8`` and its halves
-        added (numpy's recursive ``pairwise_sum``, run with the explicit stack
-        ``frames`` int64[64, 3], ``values`` float64[64, 2])."""
-        n = x.shape[1]
-        nan_exact = not (s - s == 0.0)   # slip NaN or infinite
-        if n <= _PAIRWISE_BLOCK:
-            return _leaf(s, x, phi, k, out, j, rp, rk, 0, n, nan_exact)
-        top = 0
-        nv = 0
-        frames[0, 0] = 0      # first slider of the run
-        frames[0, 1] = n      # length of the run
-        frames[0, 2] = 0      # 0: left half next, 1: right half next, 2: add them
-        while top >= 0:
-            lo = frames[top, 0]
-            m = frames[top, 1]
-            if m <= _PAIRWISE_BLOCK:
-                f, t = _leaf(s, x, phi, k, out, j, rp, rk, lo, m, nan_exact)
-                values[nv, 0] = f
-                values[nv, 1] = t
-                nv += 1
-                top -= 1
-                continue
-            half = m // 2
-            half -= half % _LANES
-            stage = frames[top, 2]
-            frames[top, 2] = stage + 1
-            if stage == 0:
-                top += 1
-                frames[top, 0] = lo
-                frames[top, 1] = half
-                frames[top, 2] = 0
-            elif stage == 1:
-                top += 1
-                frames[top, 0] = lo + half
-                frames[top, 1] = m - half
-                frames[top, 2] = 0
-            else:
-                nv -= 1
-                values[nv - 1, 0] = values[nv - 1, 0] + values[nv, 0]
-                values[nv - 1, 1] = values[nv - 1, 1] + values[nv, 1]
-                top -= 1
-        return values[0, 0], values[0, 1]
-
-    @njit(cache=True)
+    @njit(cache=True, fastmath=_REDUCTION_MATH, _nrt=False)
     def bank_update_kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
         """Compiled Jenkins-bank return mapping (the kernel of :func:`jenkins_update`).
 
-        Callable from other ``@njit`` code (solvers' step loops). Single-threaded, no
-        fast-math, no heap allocation: bitwise equal to the numpy reference (8-wide
-        SIMD lanes reproduce numpy's pairwise summation order).
+        Callable from other ``@njit`` code (solvers' step loops; pass preallocated
+        arrays, not slices made per call: a view costs more than a small bank).
+        Single-threaded, no heap allocation, compiled without reference counting
+        (``_nrt=False``: the array arguments' incref/decref around the copy branch
+        cost ~75 ns per call, more than a 300-slider joint).
 
         Parameters
         ----------
@@ -438,19 +245,23 @@ if njit is not None:
             ``n_joints``.
         out_anchor : float64[n_joints, n_sliders], C-contiguous
             Receives the trial slider positions (m); may be ``anchor`` itself (commit
-            in place: each block is read before it is written).
+            in place). Other overlaps are not allowed.
         force, tangent : float64[n_joints]
             Receive the joint force (N) and tangent stiffness (N/m).
         """
-        frames = _carray(_stack_int64(), (_STACK, 3))
-        values = _carray(_stack_float64(), (_STACK, 2))
-        per_joint_k = stiffness.shape[0] != 1
-        per_joint_phi = slip_limit.shape[0] != 1
+        # row steps instead of branches: one instance of the row loop, one summation
+        # order for every call (no loop versioning on loop-invariant conditions)
+        k_step = 1 if stiffness.shape[0] != 1 else 0
+        phi_step = 1 if slip_limit.shape[0] != 1 else 0
+        if anchor.ctypes.data != out_anchor.ctypes.data:
+            for j in range(anchor.shape[0]):
+                for i in range(anchor.shape[1]):
+                    out_anchor[j, i] = anchor[j, i]
         for j in range(anchor.shape[0]):
-            f, t = _row(slip[j], anchor, slip_limit, stiffness, out_anchor, j,
-                        j if per_joint_phi else 0, j if per_joint_k else 0, frames, values)
-            force[j] = 0.0 + f     # numpy's reduction starts from the identity +0.0
-            tangent[j] = 0.0 + t
+            f, t = _row_in_place(slip[j], out_anchor, j, stiffness, j * k_step,
+                                 slip_limit, j * phi_step)
+            force[j] = f
+            tangent[j] = t
 
 else:  # pragma: no cover
     bank_update_kernel = None
@@ -489,14 +300,12 @@ def jenkins_update(slip, anchor, stiffness, slip_limit):
     (paper eq. 2 integrated over a step: a slider moves only as much as needed to keep
     its spring stretch within ``slip_limit``), ``force = sum_i k_i (slip -
     anchor_new_i)``, and ``tangent = sum of k_i over sliders whose anchor did not move``
-    (stuck sliders, including those exactly at their limit). Sums over sliders are
-    numpy's pairwise sums (``np.sum(..., axis=-1)``).
+    (stuck sliders, including those exactly at their limit).
 
     Pure function: the committed ``anchor`` is not modified; the caller commits
     ``anchor_new`` once the step is accepted. Runs the compiled kernel
     (:func:`bank_update_kernel`) for the shapes below, the numpy reference for other
-    broadcastable shapes; both give bitwise the same numbers (``slip_limit`` without
-    NaN).
+    broadcastable shapes: the same anchors, sums equal to rounding.
 
     Parameters
     ----------
