@@ -174,7 +174,8 @@ def discretize_log(p: IwanParameters, a_low: float,
 # vectorizes (AVX-512 / AVX2). Its sums are reassociated into SIMD partial sums, so
 # they may differ from numpy's pairwise ``np.sum`` in the last bits (within the
 # summation error bound (n - 1) eps sum|terms|, Higham 2002 eq. 4.6; tests); the
-# anchors involve no sum and are bitwise those of the numpy reference. For a given
+# anchors involve no sum and are bitwise those of the numpy reference (but for the
+# sign of a zero anchor on an exact tie). For a given
 # machine the order is fixed: every call, every executor, in place or not, gives
 # bitwise the same numbers. Non-finite input: a NaN anchor stays NaN; an infinite
 # slip gives NaN force as in numpy; a NaN slip (or limit) gives NaN force but, unlike
@@ -217,8 +218,8 @@ if njit is not None:
             p = phi[rp, i]
             lo = s - p
             hi = s + p
-            y = lo if xi <= lo else xi      # NaN anchors stay NaN, ties give the limit
-            y = hi if y >= hi else y
+            y = lo if lo > xi else xi       # x86 max/min (operand order: NaN anchors
+            y = hi if hi < y else y         # stay NaN, a NaN bound keeps the anchor)
             x[j, i] = y
             f += (s - y) * k[rk, i]
             t += k[rk, i] if y == xi else 0.0
