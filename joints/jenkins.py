@@ -196,12 +196,15 @@ def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
 
 try:  # the compiled kernel; numpy fallback if numba is missing
     from numba import njit
+    from numba.core.cpu import CPUTargetOptions
 except ImportError:  # pragma: no cover - numba is a declared dependency
     njit = None
 
 # Reassociation lets LLVM split each joint's two sums into SIMD partial sums (the only
 # floating-point liberty taken: no FMA contraction, no NaN/inf assumptions).
 _REDUCTION_MATH = {"reassoc", "nsz"}
+# Compile the kernel without reference counting where numba offers the (private) switch.
+_NO_REFCOUNT = {"_nrt": False} if njit is not None and hasattr(CPUTargetOptions, "_nrt") else {}
 
 if njit is not None:
 
@@ -225,7 +228,7 @@ if njit is not None:
             t += k[rk, i] if y == xi else 0.0
         return f, t
 
-    @njit(cache=True, fastmath=_REDUCTION_MATH, _nrt=False)
+    @njit(cache=True, fastmath=_REDUCTION_MATH, **_NO_REFCOUNT)
     def bank_update_kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
         """Compiled Jenkins-bank return mapping (the kernel of :func:`jenkins_update`).
 
