@@ -8,7 +8,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+
+# One BLAS thread unless the user says otherwise, set before numpy loads: the models
+# are small (hundreds of DOFs), threads only contend on a few cores, and a serial run
+# then gives bitwise the numbers of worker processes (which run one thread each).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
 # Sub-command modules in the order --help lists them.
 COMMANDS = [
@@ -20,6 +27,7 @@ COMMANDS = [
     "identify",
     "estimate",
     "reproduce",
+    "uncertainty",
     "diagnose",
 ]
 

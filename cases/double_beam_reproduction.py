@@ -151,11 +151,15 @@ __all__ = [
     "measured_levels",
     "log_spaced_bank",
     "phi_max_of",
+    "source_estimate",
     "joint_setup",
     "ritz_basis",
     "nonlinear_model",
+    "level_campaign",
+    "mode_weights",
     "identify_levels",
     "modal_filter_levels",
+    "identify_campaign",
     "force_scale_dependence",
     "weak_joint_recovery",
     "run_study",
@@ -373,14 +377,22 @@ def phi_max_of(K_T, R, chi, beta) -> float:
     return (K_T * (chi + 1.0) / ((1.0 + beta) * R)) ** (1.0 / (chi + 1.0))
 
 
-def joint_setup(model, data: MeasuredData, study: DoubleBeamStudy) -> JointSetup:
+def source_estimate(model, data: MeasuredData, study: DoubleBeamStudy, **options):
+    """The :data:`SOURCE_METHOD` estimate of the ``study.fit`` levels of ``data`` with
+    the FE ``model`` (paper eq. 33-37): the chi and R~ that drive the simulation.
+    ``options`` go to :func:`cases.estimate.estimate` (e.g. ``confidence``)."""
+    return estimate(data, fit_levels=study.fit, method=SOURCE_METHOD, model=model,
+                    force_scale=study.force_scale, **options)
+
+
+def joint_setup(model, data: MeasuredData, study: DoubleBeamStudy, source=None) -> JointSetup:
     """Iwan parameters and viscous damping of the simulation (module docstring).
 
     ``data`` holds one mode, levels sorted. The :data:`SOURCE_METHOD` estimate of
-    ``study.fit`` levels with the FE ``model`` gives chi and R~ (unless overridden).
+    ``study.fit`` levels with the FE ``model`` (:func:`source_estimate`, or ``source``
+    if given) gives chi and R~ (unless overridden).
     """
-    src = estimate(data, fit_levels=study.fit, method=SOURCE_METHOD, model=model,
-                   force_scale=study.force_scale)
+    src = source_estimate(model, data, study) if source is None else source
     chi = src.chi if study.chi is None else float(study.chi)
     if study.R is not None:
         R = float(study.R)
@@ -453,6 +465,37 @@ def nonlinear_model(model, setup: JointSetup, study: DoubleBeamStudy):
     a_low = min(a_low, 0.5 * setup.phi_max)
     bank = log_spaced_bank(setup.params, a_low, study.sliders_per_octave)
     return red, bank
+
+
+def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy):
+    """The stepped-sine campaign of the study: ``study.lines`` (Hz, upward) at the
+    forces ``setup.force`` (N) on the drive DOF, every DOF recorded, harmonic balance
+    with ``study.hb`` (:class:`fe.stepped_sine.HBProtocol`).
+
+    Returns
+    -------
+    fe.stepped_sine.Campaign
+    """
+    from fe.stepped_sine import Campaign, HBProtocol
+
+    n = model.M.shape[0]
+    load = np.zeros(n)
+    load[int(model.drive_dof)] = 1.0
+    return Campaign(study.lines, setup.force, load, np.arange(n), HBProtocol(study.hb))
+
+
+def mode_weights(model, setup: JointSetup):
+    """The FE mode ``phi`` (mass-normalized, kg^-1/2) of ``setup.fe_mode`` and the B
+    weights ``q_m = w_m (g_m . phi)^2`` of its joints (eq. 1 of :mod:`cases.estimate`).
+
+    Returns
+    -------
+    (phi (n,), weights (n_joints,))
+    """
+    _, shapes = model.modes(setup.fe_mode)
+    phi = shapes[:, setup.fe_mode - 1]
+    gphi = np.asarray(model.slip_matrix @ phi).ravel()
+    return phi, setup.shares * gphi ** 2
 
 
 # =========================================================================== identification
@@ -587,6 +630,28 @@ def modal_filter_levels(freq_hz, receptance, M, phi, drive_dof: int, omega_n: fl
                              delta_c=dc, delta_omega2=omega_n ** 2 - Om ** 2, slip=sl,
                              delta_c_decoupled=abs(kappa1(R, chi)) * B,
                              delta_omega2_decoupled=kappa2_exact(R, chi) * B)
+
+
+def identify_campaign(model, setup: JointSetup, study: DoubleBeamStudy, res, phi, weights,
+                      progress=None):
+    """Per-level modal data of a finished campaign ``res``: LSCF at the response DOF
+    (:func:`identify_levels`, the study's options) and the modal filter of every DOF
+    (:func:`modal_filter_levels`). ``phi``, ``weights``: :func:`mode_weights`;
+    ``progress``: tqdm bar or None (one tick per identified level).
+
+    Returns
+    -------
+    (LevelIdentification, ModalFilterLevels)
+    """
+    ident = identify_levels(study.lines, res.receptance[:, :, int(model.response_dof)],
+                            res.slip_amplitude, setup.force, study.band_hz,
+                            setup.omega_n / (2 * math.pi), weights,
+                            options=study.identify_options, progress=progress)
+    mf = modal_filter_levels(study.lines, res.receptance, model.M, phi, model.drive_dof,
+                             setup.omega_n, 2 * setup.zeta_viscous * setup.omega_n,
+                             res.slip_amplitude, model.slip_matrix, setup.shares, setup.R,
+                             setup.chi)
+    return ident, mf
 
 
 # =========================================================================== force scale
@@ -923,7 +988,7 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     DoubleBeamReport
     """
     from cases.double_beam import build_double_beam
-    from fe.stepped_sine import Campaign, HBProtocol, campaign_hash, run_campaign
+    from fe.stepped_sine import campaign_hash, run_campaign
 
     timings = {}
     t0 = time.perf_counter()
@@ -933,10 +998,7 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     red, bank = nonlinear_model(model, setup, study)
     timings["setup"] = time.perf_counter() - t0
 
-    n = model.M.shape[0]
-    load = np.zeros(n)
-    load[int(model.drive_dof)] = 1.0
-    camp = Campaign(study.lines, setup.force, load, np.arange(n), HBProtocol(study.hb))
+    camp = level_campaign(model, setup, study)
     store_dir = None
     if store is not None:
         store_dir = Path(store) / f"campaign-hb-{campaign_hash(red, bank, camp)[:12]}"
@@ -946,19 +1008,13 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     timings["campaign"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    _, shapes = model.modes(setup.fe_mode)
-    phi = shapes[:, setup.fe_mode - 1]
-    gphi = np.asarray(model.slip_matrix @ phi).ravel()
-    weights = setup.shares * gphi ** 2
+    phi, weights = mode_weights(model, setup)
     bar = None
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=study.n_levels, desc="identify", unit="level", leave=False)
     try:
-        ident = identify_levels(study.lines, res.receptance[:, :, int(model.response_dof)],
-                                res.slip_amplitude, setup.force, study.band_hz,
-                                setup.omega_n / (2 * math.pi), weights,
-                                options=study.identify_options, progress=bar)
+        ident, mf = identify_campaign(model, setup, study, res, phi, weights, progress=bar)
     finally:
         if bar is not None:
             bar.close()
@@ -966,10 +1022,6 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
         bad = data.level[~np.isfinite(ident.omega2)]
         raise RuntimeError(f"no mode identified near {setup.omega_n / (2 * math.pi):.1f} Hz at "
                            f"simulated level(s) {', '.join(map(str, bad))}")
-    mf = modal_filter_levels(study.lines, res.receptance, model.M, phi, model.drive_dof,
-                             setup.omega_n, 2 * setup.zeta_viscous * setup.omega_n,
-                             res.slip_amplitude, model.slip_matrix, setup.shares, setup.R,
-                             setup.chi)
 
     def as_data(om2, ze, slip, source):
         return MeasuredData(

@@ -246,6 +246,16 @@ class PowerLawFit:
     def kappa1_B(self) -> float:
         return math.exp(self.ln_kt) / self.p if self.p > 0 else math.nan
 
+    @property
+    def cov_kappa1_B(self) -> np.ndarray | None:
+        """Covariance of ``(chi + 1, ln |kappa1| B)``: :attr:`cov` mapped by the delta
+        method through ``ln |kappa1| B = ln Kt - ln p`` (Jacobian ``[[1, 0], [-1/p, 1]]``);
+        None without residual degrees of freedom."""
+        if self.cov is None:
+            return None
+        J = np.array([[1.0, 0.0], [-1.0 / self.p, 1.0]])
+        return J @ self.cov @ J.T
+
     def delta_c(self, r, p=None, ln_kt=None):
         """Joint damping ``|kappa1| B r^p`` (rad^2/s^2) at relative amplitude ``r``."""
         p = self.p if p is None else p

@@ -32,17 +32,22 @@ import argparse
 
 from fe.executor import ExecutorSpec
 
-__all__ = ["add_executor_arguments", "executor_from_args"]
+__all__ = ["add_executor_arguments", "executor_from_args", "int_at_least"]
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+def int_at_least(minimum: int):
+    """argparse ``type`` for whole numbers >= ``minimum`` (one-line error otherwise)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
+        return value
+
+    return parse
 
 
 def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
@@ -50,7 +55,7 @@ def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
         "parallel execution",
         "Results are identical (bit for bit) whichever executor runs the sweep.")
-    group.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+    group.add_argument("--workers", type=int_at_least(1), default=None, metavar="N",
                        help="start a local dask.distributed cluster of N worker processes "
                             "(one thread each) for this run")
     group.add_argument("--scheduler", default=None, metavar="ADDRESS",
