@@ -1,8 +1,8 @@
 """Peak memory of the largest default runs, each in a fresh child process.
 
-Runs ``iwanfe reproduce lumped`` and ``iwanfe reproduce double-beam`` (default
-settings, serial, output to a temporary directory, no progress bars) one after the
-other as ``python -m cases.cli ...`` and prints each child's peak resident set size
+Runs ``iwanfe reproduce lumped``, ``iwanfe reproduce double-beam`` and ``iwanfe
+uncertainty`` (default settings, serial, output to a temporary directory, no progress
+bars) one after the other as ``python -m cases.cli ...`` and prints each child's peak resident set size
 (``ru_maxrss`` from ``os.wait4``; KiB on Linux) in MiB, with its wall time and exit
 status. A command that fails (e.g. a target not implemented yet) is reported with the
 last line of its stderr and skipped. Only the child process itself is measured: with
@@ -11,7 +11,7 @@ are measured.
 
 Usage::
 
-    python benchmarks/bench_memory.py                   # both targets (a few minutes)
+    python benchmarks/bench_memory.py                   # all targets (about 2 minutes)
     python benchmarks/bench_memory.py --targets lumped
 """
 from __future__ import annotations
@@ -23,7 +23,11 @@ import sys
 import tempfile
 import time
 
-TARGETS = ("lumped", "double-beam")
+TARGETS = {  # name -> iwanfe arguments (the output directory is appended)
+    "lumped": ["reproduce", "lumped"],
+    "double-beam": ["reproduce", "double-beam"],
+    "uncertainty": ["uncertainty"],
+}
 
 
 def peak_rss(argv: list[str], cwd: str) -> tuple[int, float, float, str]:
@@ -59,10 +63,10 @@ def main(argv=None) -> int:
     worst = None
     for target in targets:
         with tempfile.TemporaryDirectory() as out:
-            cmd = [sys.executable, "-m", "cases.cli", "reproduce", target, "--out", out,
+            cmd = [sys.executable, "-m", "cases.cli", *TARGETS[target], "--out", out,
                    "--no-progress"]
             code, mib, wall, tail = peak_rss(cmd, repo)
-        name = f"iwanfe reproduce {target}"
+        name = "iwanfe " + " ".join(TARGETS[target])
         if code != 0:
             print(f"{name:48s} {'-':>9} {wall:8.1f}  skipped: exit {code}: {tail[:120]}")
             continue
