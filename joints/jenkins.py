@@ -22,10 +22,11 @@ of sliders that slip at that amplitude, c = 0.5 (chi = -0.2) to 1.2 (chi = -0.5)
 
 State update: :func:`jenkins_update` (pure) and :func:`jenkins_update_into` (in place)
 run the compiled kernel :func:`bank_update_kernel`, which compiled solvers may call
-from their own ``@njit`` step loops: a plain loop over each joint's sliders that LLVM
-vectorizes. Anchors are bitwise those of the numpy update; force and tangent sums agree
-with it to summation rounding (SIMD partial sums instead of numpy's pairwise order).
-Throughput and cost model: ``benchmarks/README.md`` (``bench_jenkins.py``).
+from their own ``@njit`` step loops: blocks of 8 sliders as explicit 8-lane vector IR,
+summed in a fixed order (comment above ``LANES``), so the numbers do not depend on how
+or where the kernel was compiled. Anchors are numpy's bit for bit; force and tangent
+sums agree with numpy's to rounding. Throughput and cost model: ``benchmarks/README.md``
+(``bench_jenkins.py``).
 """
 from __future__ import annotations
 
@@ -170,16 +171,23 @@ def discretize_log(p: IwanParameters, a_low: float,
 #     force_j   = sum_i (s - x_new) k
 #     tangent_j = sum_i (k if x_new == x else 0)
 #
-# The compiled kernel is a plain loop over the sliders of each joint that LLVM
-# vectorizes (AVX-512 / AVX2). Its sums are reassociated into SIMD partial sums, so
-# they may differ from numpy's pairwise ``np.sum`` in the last bits (within the
-# summation error bound (n - 1) eps sum|terms|, Higham 2002 eq. 4.6; tests); the
-# anchors involve no sum and are bitwise those of the numpy reference (but for the
-# sign of a zero anchor on an exact tie). For a given
-# machine the order is fixed: every call, every executor, in place or not, gives
-# bitwise the same numbers. Non-finite input: a NaN anchor stays NaN; an infinite
-# slip gives NaN force as in numpy; a NaN slip (or limit) gives NaN force but, unlike
-# numpy, leaves the anchors where they were (and counts them stuck).
+# The compiled kernel runs each joint's sliders in blocks of 8 as explicit 8-lane vector
+# IR (one AVX-512 register, two AVX2 ones): two interleaved accumulators (lane m of
+# accumulator u adds the terms 16 b + 8 u + m, b = 0, 1, ...; a last odd block goes to
+# accumulator 0), then accumulator 0 + accumulator 1 lane by lane, the 8 lanes summed as
+# ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)), plus the n mod 8 last sliders
+# summed in order. No fast-math flags: that order is fixed by the IR, so every
+# compilation (fresh or from numba's cache, any SIMD width, any machine) gives the same
+# bits, which is what makes sweeps bitwise identical on every executor. The sums differ
+# from numpy's pairwise ``np.sum`` in the last bits (within (n - 1) eps sum|terms|,
+# Higham 2002 eq. 4.6; tests, and tests replay the order above in numpy bit for bit);
+# the anchors involve no sum and are numpy's bit for bit (but for the sign of a zero
+# anchor on an exact tie). Non-finite input: a NaN anchor stays NaN; an infinite slip
+# gives NaN force as in numpy; a NaN slip (or limit) gives NaN force but, unlike numpy,
+# leaves the anchors where they were (and counts them stuck).
+
+LANES = 8       # lanes of the vector IR
+INTERLEAVE = 2  # independent vector accumulators
 
 
 def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
@@ -195,40 +203,136 @@ def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
 
 
 try:  # the compiled kernel; numpy fallback if numba is missing
-    from numba import njit
+    from llvmlite import ir as _ir
+    from numba import njit, types as _nbtypes
     from numba.core.cpu import CPUTargetOptions
+    from numba.extending import intrinsic as _intrinsic
 except ImportError:  # pragma: no cover - numba is a declared dependency
     njit = None
 
-# Reassociation lets LLVM split each joint's two sums into SIMD partial sums (the only
-# floating-point liberty taken: no FMA contraction, no NaN/inf assumptions).
-_REDUCTION_MATH = {"reassoc", "nsz"}
 # Compile the kernel without reference counting where numba offers the (private) switch.
 _NO_REFCOUNT = {"_nrt": False} if njit is not None and hasattr(CPUTargetOptions, "_nrt") else {}
 
 if njit is not None:
 
-    @njit(cache=True, fastmath=_REDUCTION_MATH, inline="always")
+    @_intrinsic
+    def _simd_blocks(typingctx, s, x, phi, k, ix, ip, ik, n):
+        """Return mapping of the ``n // 8`` full blocks of 8 sliders of one joint, in
+        place on ``x`` (flat C-contiguous arrays: anchors ``x[ix + i]``, limits
+        ``phi[ip + i]``, stiffnesses ``k[ik + i]``); returns their (force, tangent)
+        summed in the order of the comment above."""
+        ok = all(isinstance(a, _nbtypes.Array) and a.dtype == _nbtypes.float64
+                 and a.layout == "C" for a in (x, phi, k))
+        if not ok or s != _nbtypes.float64 or not x.mutable:
+            return None
+        intp = _nbtypes.intp
+        sig = _nbtypes.UniTuple(_nbtypes.float64, 2)(s, x, phi, k, intp, intp, intp, intp)
+
+        def codegen(context, builder, signature, args):
+            s_v, _, _, _, ix_v, ip_v, ik_v, n_v = args
+            vty = _ir.VectorType(_ir.DoubleType(), LANES)
+            i32 = _ir.IntType(32)
+            ity = ix_v.type
+            px, pphi, pk = (context.make_array(t)(context, builder, v).data
+                            for t, v in zip(signature.args[1:4], args[1:4]))
+            sv = _ir.Constant(vty, _ir.Undefined)
+            for m in range(LANES):
+                sv = builder.insert_element(sv, s_v, _ir.Constant(i32, m))
+            zero = _ir.Constant(vty, [0.0] * LANES)
+
+            def block(i, f_acc, t_acc):
+                """Sliders i .. i+7: clamp, store, accumulate; new accumulators."""
+                def at(ptr, base):
+                    return builder.bitcast(builder.gep(ptr, [builder.add(base, i)]),
+                                           vty.as_pointer())
+                xv = builder.load(at(px, ix_v), align=8)
+                pv = builder.load(at(pphi, ip_v), align=8)
+                kv = builder.load(at(pk, ik_v), align=8)
+                lo = builder.fsub(sv, pv)
+                hi = builder.fadd(sv, pv)
+                # x86 max/min operand order: NaN anchors stay NaN, a NaN bound keeps x
+                y = builder.select(builder.fcmp_ordered(">", lo, xv), lo, xv)
+                y = builder.select(builder.fcmp_ordered("<", hi, y), hi, y)
+                builder.store(y, at(px, ix_v), align=8)
+                f_term = builder.fmul(builder.fsub(sv, y), kv)
+                t_term = builder.select(builder.fcmp_ordered("==", y, xv), kv, zero)
+                return builder.fadd(f_acc, f_term), builder.fadd(t_acc, t_term)
+
+            def loop(name, start, limit, accs):
+                """Blocks from slider ``start`` while ``len(accs)`` more fit below
+                ``limit``, block u of each step into accumulator u."""
+                entry = builder.basic_block
+                head = builder.append_basic_block(name + ".head")
+                body = builder.append_basic_block(name + ".body")
+                done = builder.append_basic_block(name + ".done")
+                builder.branch(head)
+                builder.position_at_end(head)
+                i = builder.phi(ity)
+                i.add_incoming(start, entry)
+                phis = []
+                for f, t in accs:
+                    pf, pt = builder.phi(vty), builder.phi(vty)
+                    pf.add_incoming(f, entry)
+                    pt.add_incoming(t, entry)
+                    phis.append((pf, pt))
+                nxt = builder.add(i, _ir.Constant(ity, LANES * len(accs)))
+                builder.cbranch(builder.icmp_signed("<=", nxt, limit), body, done)
+                builder.position_at_end(body)
+                new = [block(builder.add(i, _ir.Constant(ity, LANES * u)), pf, pt)
+                       for u, (pf, pt) in enumerate(phis)]
+                latch = builder.basic_block
+                builder.branch(head)
+                i.add_incoming(nxt, latch)
+                for (pf, pt), (f, t) in zip(phis, new):
+                    pf.add_incoming(f, latch)
+                    pt.add_incoming(t, latch)
+                builder.position_at_end(done)
+                return i, phis
+
+            limit = builder.mul(builder.sdiv(n_v, _ir.Constant(ity, LANES)),
+                                _ir.Constant(ity, LANES))
+            i_end, accs = loop("pairs", _ir.Constant(ity, 0), limit,
+                               [(zero, zero)] * INTERLEAVE)
+            _, (last,) = loop("single", i_end, limit, [accs[0]])
+            accs = [last] + accs[1:]
+
+            def tree(values):
+                while len(values) > 1:
+                    values = [builder.fadd(values[m], values[m + 1])
+                              for m in range(0, len(values), 2)]
+                return values[0]
+
+            sums = []
+            for which in (0, 1):
+                v = tree([a[which] for a in accs])
+                sums.append(tree([builder.extract_element(v, _ir.Constant(i32, m))
+                                  for m in range(LANES)]))
+            return context.make_tuple(builder, signature.return_type, sums)
+
+        return sig, codegen
+
+    @njit(cache=True, inline="always")
     def _row_in_place(s, x, j, k, rk, phi, rp):
         """Return mapping of joint ``j``'s sliders, committed into ``x[j]``; returns
-        (force, tangent). One array read and written at the same index, so LLVM
-        vectorizes it without a run-time overlap check; the only row loop, so every
-        caller gets the same summation order."""
-        f = 0.0
-        t = 0.0
-        for i in range(x.shape[1]):
+        (force, tangent): the full blocks of 8 by :func:`_simd_blocks`, the n mod 8
+        last sliders in order (independently, then added)."""
+        n = x.shape[1]
+        f_tail = 0.0
+        t_tail = 0.0
+        for i in range(n - n % LANES, n):
             xi = x[j, i]
             p = phi[rp, i]
             lo = s - p
             hi = s + p
-            y = lo if lo > xi else xi       # x86 max/min (operand order: NaN anchors
-            y = hi if hi < y else y         # stay NaN, a NaN bound keeps the anchor)
+            y = lo if lo > xi else xi
+            y = hi if hi < y else y
             x[j, i] = y
-            f += (s - y) * k[rk, i]
-            t += k[rk, i] if y == xi else 0.0
-        return f, t
+            f_tail += (s - y) * k[rk, i]
+            t_tail += k[rk, i] if y == xi else 0.0
+        f, t = _simd_blocks(s, x, phi, k, j * n, rp * n, rk * n, n)
+        return f + f_tail, t + t_tail
 
-    @njit(cache=True, fastmath=_REDUCTION_MATH, **_NO_REFCOUNT)
+    @njit(cache=True, **_NO_REFCOUNT)
     def bank_update_kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
         """Compiled Jenkins-bank return mapping (the kernel of :func:`jenkins_update`).
 
@@ -253,8 +357,6 @@ if njit is not None:
         force, tangent : float64[n_joints]
             Receive the joint force (N) and tangent stiffness (N/m).
         """
-        # row steps instead of branches: one instance of the row loop, one summation
-        # order for every call (no loop versioning on loop-invariant conditions)
         k_step = 1 if stiffness.shape[0] != 1 else 0
         phi_step = 1 if slip_limit.shape[0] != 1 else 0
         if anchor.ctypes.data != out_anchor.ctypes.data:
