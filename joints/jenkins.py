@@ -296,17 +296,23 @@ if njit is not None:
             _, (last,) = loop("single", i_end, limit, [accs[0]])
             accs = [last] + accs[1:]
 
-            def tree(values):
-                while len(values) > 1:
-                    values = [builder.fadd(values[m], values[m + 1])
-                              for m in range(0, len(values), 2)]
-                return values[0]
+            def lane_tree(v):
+                """((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)) by shuffles: after
+                step h, lane 2h m holds the sum of lanes 2h m .. 2h m + 2h - 1."""
+                h = 1
+                while h < LANES:
+                    partner = [m ^ h for m in range(LANES)]
+                    v = builder.fadd(v, builder.shuffle_vector(
+                        v, v, _ir.Constant(_ir.VectorType(i32, LANES), partner)))
+                    h *= 2
+                return builder.extract_element(v, _ir.Constant(i32, 0))
 
             sums = []
             for which in (0, 1):
-                v = tree([a[which] for a in accs])
-                sums.append(tree([builder.extract_element(v, _ir.Constant(i32, m))
-                                  for m in range(LANES)]))
+                v = accs[0][which]
+                for a in accs[1:]:
+                    v = builder.fadd(v, a[which])
+                sums.append(lane_tree(v))
             return context.make_tuple(builder, signature.return_type, sums)
 
         return sig, codegen
