@@ -100,6 +100,7 @@ from cases.double_beam_reproduction import (
 )
 from cases.estimate import r_tilde
 from fe.executor import ExecutorSpec, run_sweep, task_seeds
+from fe.store import open_manifest
 from fe.harmonic_balance import HBSettings
 
 __all__ = [
@@ -501,22 +502,8 @@ class SampleStore:
 
     def __init__(self, directory, digest: str, description: dict | None = None):
         self.path = Path(directory)
-        self.path.mkdir(parents=True, exist_ok=True)
-        mpath = self.path / "manifest.json"
-        if mpath.exists():
-            try:
-                manifest = json.loads(mpath.read_text())
-            except (OSError, json.JSONDecodeError) as exc:
-                raise ValueError(f"{mpath}: unreadable sample manifest ({exc})") from None
-            if manifest.get("hash") != digest:
-                raise ValueError(f"{self.path} holds another Monte Carlo sweep (hash "
-                                 f"{str(manifest.get('hash'))[:12]}, this one {digest[:12]}); "
-                                 f"use another directory")
-        else:
-            tmp = self.path / "manifest.json.tmp"
-            tmp.write_text(json.dumps({"format": FORMAT, "hash": digest,
-                                       **(description or {})}, indent=1))
-            os.replace(tmp, mpath)
+        open_manifest(self.path, digest, {"format": FORMAT, **(description or {})},
+                      "Monte Carlo sweep")
 
     def file(self, index: int) -> Path:
         return self.path / ("nominal.npz" if index < 0 else f"sample_{index:05d}.npz")

@@ -48,6 +48,7 @@ import numpy as np
 
 from fe.harmonic_balance import HBSettings, continuation
 from fe.executor import ExecutorSpec, run_sweep
+from fe.store import open_manifest, write_manifest
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
 
@@ -359,12 +360,6 @@ def _executor_spec(executor, workers) -> ExecutorSpec:
 # --------------------------------------------------------------------------- campaign
 
 
-def _write_manifest(store: Path, manifest: dict) -> None:
-    tmp = store / "manifest.json.tmp"
-    tmp.write_text(json.dumps(manifest, indent=1))
-    os.replace(tmp, store / "manifest.json")
-
-
 def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
                  store: str | os.PathLike | None = None, progress: bool = True,
                  workers: int | None = None,
@@ -409,28 +404,16 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
     manifest = None
     if store is not None:
         store = Path(store)
-        store.mkdir(parents=True, exist_ok=True)
-        mpath = store / "manifest.json"
-        if mpath.exists():
-            try:
-                manifest = json.loads(mpath.read_text())
-            except (OSError, json.JSONDecodeError) as exc:
-                raise ValueError(f"{mpath}: unreadable campaign manifest ({exc})") from None
-            if manifest.get("hash") != digest:
-                raise ValueError(f"{store} holds a campaign with other parameters "
-                                 f"(hash {str(manifest.get('hash'))[:12]}, this one "
-                                 f"{digest[:12]}); use another directory")
-            for key, info in manifest.get("levels", {}).items():
-                path = store / info["file"]
-                if path.exists():
-                    results[int(key)] = LevelResult.from_npz(path)
-        else:
-            manifest = {"format": FORMAT, "hash": digest, "protocol": campaign.protocol.name,
-                        "force": campaign.force.tolist(),
-                        "frequency_hz": [float(campaign.frequency_hz[0]),
-                                         float(campaign.frequency_hz[-1]), n_lines],
-                        "levels": {}}
-            _write_manifest(store, manifest)
+        manifest = open_manifest(
+            store, digest, {"format": FORMAT, "protocol": campaign.protocol.name,
+                            "force": campaign.force.tolist(),
+                            "frequency_hz": [float(campaign.frequency_hz[0]),
+                                             float(campaign.frequency_hz[-1]), n_lines],
+                            "levels": {}}, "campaign")
+        for key, info in manifest.get("levels", {}).items():
+            path = store / info["file"]
+            if path.exists():
+                results[int(key)] = LevelResult.from_npz(path)
     loaded = set(results)
     todo = [lv for lv in range(n_levels) if lv not in results]
 
@@ -441,7 +424,7 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
             res.to_npz(store / name)
             manifest["levels"][str(level)] = {"file": name, "force": res.force,
                                               "elapsed_s": res.elapsed}
-            _write_manifest(store, manifest)
+            write_manifest(store, manifest)
         if on_level is not None:
             on_level(level, res)
 
