@@ -1,5 +1,4 @@
 """fe/store.py: a store accepts only its own sweep; the manifest survives a crash."""
-
 import pytest
 
 from fe.store import open_manifest, write_manifest
