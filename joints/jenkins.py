@@ -175,8 +175,9 @@ def discretize_log(p: IwanParameters, a_low: float,
 # IR (one AVX-512 register, two AVX2 ones): two interleaved accumulators (lane m of
 # accumulator u adds the terms 16 b + 8 u + m, b = 0, 1, ...; a last odd block goes to
 # accumulator 0), then accumulator 0 + accumulator 1 lane by lane, the 8 lanes summed as
-# ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)), plus the n mod 8 last sliders
-# summed in order. No fast-math flags: that order is fixed by the IR, so every
+# ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)); plus, when n mod 8 >= 4, the next
+# 4 sliders as a 4-lane block summed (l0 + l1) + (l2 + l3); plus the n mod 4 last
+# sliders summed in order. No fast-math flags: that order is fixed by the IR, so every
 # compilation (fresh or from numba's cache, any SIMD width, any machine) gives the same
 # bits, which is what makes sweeps bitwise identical on every executor. The sums differ
 # from numpy's pairwise ``np.sum`` in the last bits (within (n - 1) eps sum|terms|,
@@ -217,10 +218,10 @@ if njit is not None:
 
     @_intrinsic
     def _simd_blocks(typingctx, s, x, phi, k, ix, ip, ik, n):
-        """Return mapping of the ``n // 8`` full blocks of 8 sliders of one joint, in
-        place on ``x`` (flat C-contiguous arrays: anchors ``x[ix + i]``, limits
-        ``phi[ip + i]``, stiffnesses ``k[ik + i]``); returns their (force, tangent)
-        summed in the order of the comment above."""
+        """Return mapping of the ``n // 8`` full blocks of 8 sliders of one joint and of
+        the next 4 when ``n mod 8 >= 4``, in place on ``x`` (flat C-contiguous arrays:
+        anchors ``x[ix + i]``, limits ``phi[ip + i]``, stiffnesses ``k[ik + i]``);
+        returns their (force, tangent) summed in the order of the comment above."""
         ok = all(isinstance(a, _nbtypes.Array) and a.dtype == _nbtypes.float64
                  and a.layout == "C" for a in (x, phi, k))
         if not ok or s != _nbtypes.float64 or not x.mutable:
@@ -235,13 +236,22 @@ if njit is not None:
             ity = ix_v.type
             px, pphi, pk = (context.make_array(t)(context, builder, v).data
                             for t, v in zip(signature.args[1:4], args[1:4]))
-            sv = _ir.Constant(vty, _ir.Undefined)
-            for m in range(LANES):
-                sv = builder.insert_element(sv, s_v, _ir.Constant(i32, m))
+
+            def splat(value, width):
+                v = _ir.Constant(_ir.VectorType(value.type, width), _ir.Undefined)
+                for m in range(width):
+                    v = builder.insert_element(v, value, _ir.Constant(i32, m))
+                return v
+
+            sv = sv_full = splat(s_v, LANES)
             zero = _ir.Constant(vty, [0.0] * LANES)
 
-            def block(i, f_acc, t_acc):
-                """Sliders i .. i+7: clamp, store, accumulate; new accumulators."""
+            def block(i, f_acc, t_acc, width=LANES):
+                """Sliders i .. i+width-1: clamp, store, accumulate; new accumulators."""
+                vty = _ir.VectorType(_ir.DoubleType(), width)
+                sv = splat(s_v, width) if width != LANES else sv_full
+                zero = _ir.Constant(vty, [0.0] * width)
+
                 def at(ptr, base):
                     return builder.bitcast(builder.gep(ptr, [builder.add(base, i)]),
                                            vty.as_pointer())
@@ -299,11 +309,12 @@ if njit is not None:
             def lane_tree(v):
                 """((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)) by shuffles: after
                 step h, lane 2h m holds the sum of lanes 2h m .. 2h m + 2h - 1."""
+                width = v.type.count
                 h = 1
-                while h < LANES:
-                    partner = [m ^ h for m in range(LANES)]
+                while h < width:
+                    partner = [m ^ h for m in range(width)]
                     v = builder.fadd(v, builder.shuffle_vector(
-                        v, v, _ir.Constant(_ir.VectorType(i32, LANES), partner)))
+                        v, v, _ir.Constant(_ir.VectorType(i32, width), partner)))
                     h *= 2
                 return builder.extract_element(v, _ir.Constant(i32, 0))
 
@@ -313,6 +324,19 @@ if njit is not None:
                 for a in accs[1:]:
                     v = builder.fadd(v, a[which])
                 sums.append(lane_tree(v))
+            # a half block of 4 when n mod 8 >= 4, its own lane tree added after
+            half = LANES // 2
+            rem = builder.srem(n_v, _ir.Constant(ity, LANES))
+            before = builder.basic_block
+            with builder.if_then(builder.icmp_signed(">=", rem, _ir.Constant(ity, half))):
+                zero4 = _ir.Constant(_ir.VectorType(_ir.DoubleType(), half), [0.0] * half)
+                halves = [lane_tree(v) for v in block(limit, zero4, zero4, half)]
+                inside = builder.basic_block
+            phis = [builder.phi(_ir.DoubleType()) for _ in (0, 1)]
+            for ph, h in zip(phis, halves):
+                ph.add_incoming(_ir.Constant(_ir.DoubleType(), 0.0), before)
+                ph.add_incoming(h, inside)
+            sums = [builder.fadd(v, ph) for v, ph in zip(sums, phis)]
             return context.make_tuple(builder, signature.return_type, sums)
 
         return sig, codegen
@@ -320,12 +344,12 @@ if njit is not None:
     @njit(cache=True, inline="always")
     def _row_in_place(s, x, j, k, rk, phi, rp):
         """Return mapping of joint ``j``'s sliders, committed into ``x[j]``; returns
-        (force, tangent): the full blocks of 8 by :func:`_simd_blocks`, the n mod 8
+        (force, tangent): the blocks of 8 and 4 by :func:`_simd_blocks`, the n mod 4
         last sliders in order (independently, then added)."""
         n = x.shape[1]
         f_tail = 0.0
         t_tail = 0.0
-        for i in range(n - n % LANES, n):
+        for i in range(n - n % (LANES // 2), n):
             xi = x[j, i]
             p = phi[rp, i]
             lo = s - p

@@ -143,8 +143,9 @@ def test_parameter_broadcasting_gives_identical_numbers():
 def documented_order_sum(terms):
     """The kernel's summation order (joints/jenkins.py, comment above LANES), in numpy:
     lane m of accumulator u takes the blocks 16 b + 8 u (+ m), a last odd block goes
-    to accumulator 0, accumulator 0 + 1 lane by lane, a tree over the 8 lanes, plus the
-    n mod 8 last terms summed in order."""
+    to accumulator 0; accumulator 0 + 1 lane by lane, a tree over the 8 lanes; plus,
+    when n mod 8 >= 4, the tree of the next 4 terms; plus the n mod 4 last terms
+    summed in order."""
     n = terms.size
     nb = n // LANES
     acc = np.zeros((INTERLEAVE, LANES))
@@ -154,14 +155,16 @@ def documented_order_sum(terms):
     if nb % INTERLEAVE:
         acc[0] = acc[0] + terms[(nb - 1) * LANES:nb * LANES]
     v = acc[0] + acc[1]
-    lanes = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]))
+    total = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]))
+    half = terms[nb * LANES:nb * LANES + 4] if n % LANES >= 4 else np.zeros(4)
+    total = total + ((half[0] + half[1]) + (half[2] + half[3]))
     tail = 0.0
-    for x in terms[nb * LANES:]:
+    for x in terms[n - n % 4:]:
         tail = tail + x
-    return lanes + tail
+    return total + tail
 
 
-@pytest.mark.parametrize("n_sliders", [1, 7, 8, 9, 16, 23, 24, 25, 100, 1031])
+@pytest.mark.parametrize("n_sliders", [1, 3, 4, 5, 7, 8, 9, 11, 12, 13, 15, 16, 20, 23, 24, 25, 100, 1031])
 def test_sums_follow_the_documented_order_bit_for_bit(n_sliders):
     """The order is fixed by the kernel's IR, not left to the compiler: a numpy replay
     of it gives the same bits (this is what makes every executor, every compilation,
