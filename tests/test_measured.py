@@ -118,28 +118,19 @@ def test_non_numeric_or_non_finite(tmp_path, bad, column, text):
     assert error_of(p) == f"{p}:4:{column}: {text}: {bad!r}"
 
 
-@pytest.mark.parametrize("zeta", ["0", "-0.01", "1", "1.278"])
-def test_zeta_outside_open_unit_interval(tmp_path, zeta):
+@pytest.mark.parametrize("row, text, message", [
+    *[(1, f"2,1.0,2.50676e6,{z}", "zeta: zeta must be a fraction in (0, 1)")
+      for z in ("0", "-0.01", "1", "1.278")],
+    *[(4, f"5,8.0,{v},0.0128", "omega2: omega2 must be > 0") for v in ("0", "-2.5e6")],
+    *[(0, f"1,{v},2.5e6,0.0128", "excitation: excitation must be > 0") for v in ("0", "-1")],
+])
+def test_values_outside_their_range(tmp_path, row, text, message):
+    """zeta outside (0, 1), omega2 or excitation not positive: one line naming the file,
+    the line (header = line 1) and the column."""
     rows = list(ROWS)
-    rows[1] = f"2,1.0,2.50676e6,{zeta}"
+    rows[row] = text
     p = write(tmp_path, "\n".join([HEADER] + rows) + "\n")
-    assert error_of(p).startswith(f"{p}:3:zeta: zeta must be a fraction in (0, 1)")
-
-
-@pytest.mark.parametrize("value", ["0", "-2.5e6"])
-def test_omega2_not_positive(tmp_path, value):
-    rows = list(ROWS)
-    rows[4] = f"5,8.0,{value},0.0128"
-    p = write(tmp_path, "\n".join([HEADER] + rows) + "\n")
-    assert error_of(p).startswith(f"{p}:6:omega2: omega2 must be > 0")
-
-
-@pytest.mark.parametrize("value", ["0", "-1"])
-def test_excitation_not_positive(tmp_path, value):
-    rows = list(ROWS)
-    rows[0] = f"1,{value},2.5e6,0.0128"
-    p = write(tmp_path, "\n".join([HEADER] + rows) + "\n")
-    assert error_of(p).startswith(f"{p}:2:excitation: excitation must be > 0")
+    assert error_of(p).startswith(f"{p}:{row + 2}:{message}")
 
 
 def test_duplicate_mode_level(tmp_path):
