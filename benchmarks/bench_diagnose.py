@@ -1,4 +1,4 @@
-"""Blind benchmark of ``cases.diagnose`` on fresh synthetic cases.
+"""Blind benchmark of ``inverse.diagnose`` on fresh synthetic cases.
 
 For every cause (``none`` included) ``--per-cause`` cases are simulated by
 :mod:`cases.synthetic` (stepped-sine campaign of an Iwan oscillator with the hidden
@@ -10,7 +10,7 @@ gain > 1, and the timings.
 
 Targets: accuracy >= 90 %, at most one false alarm per 10 ``none`` cases.
 
-The cases are independent tasks of :func:`fe.executor.run_sweep` (each carries its
+The cases are independent tasks of :func:`runs.executor.run_sweep` (each carries its
 seed), so they run serially, in local processes or on a dask.distributed cluster with
 the same results and a progress bar either way.
 
@@ -29,10 +29,10 @@ import time
 
 import numpy as np
 
-from cases.diagnose import diagnose
-from cases.executor_cli import add_executor_arguments, executor_from_args
+from inverse.diagnose import diagnose
+from cli.executor_options import add_executor_arguments, executor_from_args
 from cases.synthetic import CAUSES, generate_case
-from fe.executor import ExecutorSpec, run_sweep
+from runs.executor import ExecutorSpec, run_sweep
 
 
 def run_case(job):

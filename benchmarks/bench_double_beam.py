@@ -2,7 +2,7 @@
 balance vs Newmark, per steady state, measured side by side in one run with the
 accuracy each ratio was measured at.
 
-Model: the default double beam (:func:`cases.double_beam.build_double_beam`, 402 free
+Model: the default double beam (:func:`cases.double_beam.model.build_double_beam`, 402 free
 DOFs, calibrated clamp) with a four-parameter Iwan element at each of the 5 glue nodes
 (chi = -0.4, beta = 0, K_T = the node's share of the stuck glue stiffness
 ``model.joint_stiffness``, the same ``phi_max`` = 6 um for all, so ``F_S = K_T phi_max
@@ -15,7 +15,7 @@ strip at the exciter) and the five joint slips. These are benchmark choices, not
 paper reproduction's (cases/double_beam_reproduction.py).
 
 1. Reduced vs full Newmark, one steady state from rest at the line of the resonance
-   peak (:class:`fe.stepped_sine.NewmarkProtocol`, 256 steps per period, the line is
+   peak (:class:`runs.stepped_sine.NewmarkProtocol`, 256 steps per period, the line is
    done when the remaining drift of the first harmonic is below ``tol``):
 
    - reduced: Ritz basis of the 12 lowest stuck-glue modes plus one static mode per
@@ -29,7 +29,7 @@ paper reproduction's (cases/double_beam_reproduction.py).
 
 2. Harmonic balance vs Newmark per steady state on the reduced model: the lines
    249-254 Hz (0.5 Hz) at 1 N, HB with continuation (default
-   :class:`fe.stepped_sine.HBProtocol`: odd harmonics to 7, 256 AFT samples) against
+   :class:`runs.stepped_sine.HBProtocol`: odd harmonics to 7, 256 AFT samples) against
    Newmark with the state carried from line to line (NewmarkProtocol, tol 1e-6).
    Accuracy: largest relative difference over the lines of the receptance amplitude
    and of the joint slip amplitudes.
@@ -56,11 +56,11 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from cases.double_beam import build_double_beam  # noqa: E402
+from cases.double_beam.model import build_double_beam  # noqa: E402
 from fe.newmark import NewmarkIntegrator, NewmarkSettings  # noqa: E402
 from fe.reduction import (JointBank, JointedSystem, full_model, rayleigh_damping,  # noqa: E402
                           reduced_basis)
-from fe.stepped_sine import Campaign, HBProtocol, NewmarkProtocol, run_campaign  # noqa: E402
+from runs.stepped_sine import Campaign, HBProtocol, NewmarkProtocol, run_campaign  # noqa: E402
 from joints.iwan import IwanParameters  # noqa: E402
 
 CHI = -0.4

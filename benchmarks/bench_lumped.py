@@ -10,7 +10,7 @@ Measures, in one process and one run:
    the output);
 3. Newmark until periodic (state carried from line to line) against harmonic balance
    per steady state on the lines of modes 2 and 4 at one level, with the modes
-   identified from both FRF sets (LSCF, :func:`cases.identify.identify_modes`):
+   identified from both FRF sets (LSCF, :func:`ident.identify.identify_modes`):
    frequency and damping must agree within 0.1 %.
 
 Targets: paper / default >= 50x; identified frequency and damping within 0.1 %.
@@ -27,9 +27,9 @@ import time
 
 import numpy as np
 
-from cases.identify import identify_modes
-from cases.lumped10 import MODE_BANDS, LumpedStudy, lumped10_setup
-from fe.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
+from ident.identify import identify_modes
+from cases.lumped10.model import MODE_BANDS, LumpedStudy, lumped10_setup
+from runs.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
                              run_campaign)
 
 

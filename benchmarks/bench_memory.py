@@ -2,7 +2,7 @@
 
 Runs ``iwanfe reproduce lumped``, ``iwanfe reproduce double-beam`` and ``iwanfe
 uncertainty`` (default settings, serial, output to a temporary directory, no progress
-bars) one after the other as ``python -m cases.cli ...`` and prints each child's peak resident set size
+bars) one after the other as ``python -m cli.main ...`` and prints each child's peak resident set size
 (``ru_maxrss`` from ``os.wait4``; KiB on Linux) in MiB, with its wall time and exit
 status. A command that fails (e.g. a target not implemented yet) is reported with the
 last line of its stderr and skipped. Only the child process itself is measured: with
@@ -54,16 +54,16 @@ def main(argv=None) -> int:
     if bad:
         ap.error(f"unknown target {bad[0]!r}; choose from {', '.join(TARGETS)}")
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    _, base, _, _ = peak_rss([sys.executable, "-c", "import numpy, scipy, numba, cases.cli"],
+    _, base, _, _ = peak_rss([sys.executable, "-c", "import numpy, scipy, numba, cli.main"],
                              repo)
     print(f"peak resident memory (ru_maxrss of the child process), Python "
-          f"{sys.version.split()[0]}; baseline 'import numpy, scipy, numba, cases.cli': "
+          f"{sys.version.split()[0]}; baseline 'import numpy, scipy, numba, cli.main': "
           f"{base:.0f} MiB")
     print(f"{'command':48s} {'peak MiB':>9} {'wall s':>8}  status")
     worst = None
     for target in targets:
         with tempfile.TemporaryDirectory() as out:
-            cmd = [sys.executable, "-m", "cases.cli", *TARGETS[target], "--out", out,
+            cmd = [sys.executable, "-m", "cli.main", *TARGETS[target], "--out", out,
                    "--no-progress"]
             code, mib, wall, tail = peak_rss(cmd, repo)
         name = "iwanfe " + " ".join(TARGETS[target])

@@ -143,7 +143,7 @@ def cantilever_study(elements=CANTILEVER_ELEMENTS, n_modes: int = 6,
 
 
 def _measured_mode(model):
-    from cases.double_beam import MEASURED_BENDING_ORDER
+    from cases.double_beam.model import MEASURED_BENDING_ORDER
 
     omega, shapes = model.modes(MEASURED_BENDING_ORDER + 6)
     order = model.bending_order(omega, shapes)
@@ -153,8 +153,8 @@ def _measured_mode(model):
 
 def _double_beam_mesh_case(cfg) -> dict:
     """One mesh of :func:`double_beam_study` (module level: a task of
-    :func:`fe.executor.run_sweep`)."""
-    from cases.double_beam import build_double_beam
+    :func:`runs.executor.run_sweep`)."""
+    from cases.double_beam.model import build_double_beam
 
     model = build_double_beam(cfg)
     f, p = _measured_mode(model)
@@ -169,11 +169,11 @@ def double_beam_study(element_sizes=DOUBLE_BEAM_ELEMENT_SIZES, joints=DOUBLE_BEA
     The strip element size is refined with the default number of joints, and the number
     of joints with the default element size. ``relative_change`` is against the finest
     mesh of each sweep. The meshes are independent tasks of
-    :func:`fe.executor.run_sweep` on ``executor`` (default serial; an
-    :class:`fe.executor.ExecutorSpec` or its kind); the results do not depend on it.
+    :func:`runs.executor.run_sweep` on ``executor`` (default serial; an
+    :class:`runs.executor.ExecutorSpec` or its kind); the results do not depend on it.
     """
-    from cases.double_beam import DoubleBeamConfig
-    from fe.executor import run_sweep
+    from cases.double_beam.model import DoubleBeamConfig
+    from runs.executor import run_sweep
 
     base = DoubleBeamConfig()
     cases = [("element_size", replace(base, element_size=s)) for s in element_sizes]

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.measured import MeasuredData, write_measured
+from ident.measured import MeasuredData, write_measured
 
 DATA_FILE = Path(__file__).resolve().parent / "data" / "double_beam_measured.csv"
 

@@ -22,7 +22,7 @@ diagnosis's fitting formulas:
    ``X`` is found per line by bisection on ``X |D(X, W)| = |G V|`` (the root is
    unique: cases whose response folds over are rejected and redrawn).
 3. **Identification**: ``omega2`` and ``zeta`` of each level from the simulated FRF by
-   :func:`cases.identify.identify_modes` (LSCF + LSFD refinement; the inverse-FRF line
+   :func:`ident.identify.identify_modes` (LSCF + LSFD refinement; the inverse-FRF line
    fit of :func:`identify_sdof` if it fails). The response
    amplitude is the steady amplitude of a dwell at the identified natural frequency
    (paper Table 1 procedure).
@@ -44,8 +44,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cases.identify import identify_modes
-from cases.measured import MeasuredData
+from ident.identify import identify_modes
+from ident.measured import MeasuredData
 from joints.iwan import IwanParameters, describing_function, kappa1, kappa2_exact
 
 __all__ = [
@@ -208,7 +208,7 @@ def simulate_level(osc: ModalOscillator, exc: Exciter, volts: float, lines, run:
 def identify_sdof(lines, frf):
     """(omega2, zeta) of the one mode of a stepped-sine receptance.
 
-    :func:`cases.identify.identify_modes` (LSCF + LSFD) with ``n_modes=1``; if it fails,
+    :func:`ident.identify.identify_modes` (LSCF + LSFD) with ``n_modes=1``; if it fails,
     the inverse-receptance line fit (Dobson 1987): least squares of
     ``1/H = m (omega2 - W^2) + i m c W`` over the lines, weighted by ``|H|^2``, gives
     ``omega2 = A0/A2``, ``zeta = A1 / (2 A2 sqrt(omega2))``."""

@@ -19,7 +19,7 @@ CHI, KT, FS, BETA = -0.4, 2.3e5, 120.0, 1.5
 
 
 def iwanfe(*args):
-    return subprocess.run([sys.executable, "-m", "cases.cli", "joint", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "cli.main", "joint", *map(str, args)],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
 
 

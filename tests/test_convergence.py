@@ -41,7 +41,7 @@ def test_double_beam_mesh_choice_is_converged():
 
 
 def test_cli_convergence_json_and_plot(tmp_path, capsys):
-    from cases.cli import main
+    from cli.main import main
 
     assert main(["convergence", "--json", "--out", str(tmp_path)]) == 0
     data = json.loads(capsys.readouterr().out)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from cases.cli import main
-from cases.diagnose import CANDIDATES, diagnose, slip_shapes, tie_ratio
-from cases.measured import write_measured
+from cli.main import main
+from inverse.diagnose import CANDIDATES, diagnose, slip_shapes, tie_ratio
+from ident.measured import write_measured
 from cases.synthetic import generate_case
 from joints.iwan import IwanParameters, describing_function, steady_loop
 

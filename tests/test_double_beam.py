@@ -9,8 +9,8 @@ import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq
 
-from cases.commands.modes import double_beam_report
-from cases.double_beam import (
+from cli.commands.modes import double_beam_report
+from cases.double_beam.model import (
     MEASURED_FREQUENCY_HZ,
     DoubleBeamConfig,
     StripGeometry,
@@ -197,7 +197,7 @@ def test_bad_config_raises():
 
 
 def run_cli(capsys, *args):
-    from cases.cli import main
+    from cli.main import main
 
     code = main(list(args))
     out = capsys.readouterr()

@@ -1,4 +1,4 @@
-"""FRF files of the simulated double-beam campaign (cases.double_beam_reproduction.
+"""FRF files of the simulated double-beam campaign (cases.double_beam.study.
 write_frf_files) through ``iwanfe identify``.
 
 Truths: the campaign's own receptance (exact CSV round trip), the study's identification
@@ -7,11 +7,11 @@ of the same FRFs (simulated_measured.csv), and the drive voltages of the measure
 import numpy as np
 import pytest
 
-import cases.double_beam_reproduction as dbr
-from cases.cli import main
-from cases.frf_io import read_frf
-from cases.identify import identify_modes
-from cases.measured import read_measured
+import cases.double_beam.study as dbr
+from cli.main import main
+from ident.frf_files import read_frf
+from ident.identify import identify_modes
+from ident.measured import read_measured
 
 COARSE = dict(df_hz=1.0, band_hz=(236.0, 268.0), sliders_per_octave=8, weak_joint_scales=())
 

@@ -1,4 +1,4 @@
-"""The double-beam reproduction (cases.double_beam_reproduction) and
+"""The double-beam reproduction (cases.double_beam.study) and
 ``iwanfe reproduce double-beam``.
 
 Coarse studies (1 Hz lines, 8 sliders per octave) keep the file fast; the full run is
@@ -17,11 +17,11 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-import cases.double_beam_reproduction as dbr
-import fe.stepped_sine as stepped_sine
-from cases.cli import main
-from cases.double_beam import build_double_beam
-from cases.measured import read_measured
+import cases.double_beam.study as dbr
+import runs.stepped_sine as stepped_sine
+from cli.main import main
+from cases.double_beam.model import build_double_beam
+from ident.measured import read_measured
 from fe.harmonic_balance import aft_joint_force
 from fe.modal import frf_modal, normal_modes
 from fe.reduction import JointBank, JointedSystem, reduced_basis

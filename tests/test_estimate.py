@@ -10,9 +10,9 @@ import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq, minimize_scalar
 
-from cases import cli
-from cases.errors import InputError
-from cases.estimate import (
+from cli import main as cli
+from ident.errors import InputError
+from inverse.estimate import (
     estimate,
     fit_damping_growth,
     joint_slip_at_resonance,
@@ -20,7 +20,7 @@ from cases.estimate import (
     parse_levels,
     zeta_with_joint,
 )
-from cases.measured import MeasuredData, read_measured
+from ident.measured import MeasuredData, read_measured
 from cases.paper_data import DATA_FILE, PUBLISHED
 from joints.iwan import IwanParameters, describing_function, kappa1, kappa2_exact
 
@@ -315,7 +315,7 @@ def test_r_scales_with_force_scale_double_beam():
     assert e1.case.fe_frequency_hz == pytest.approx(math.sqrt(data.omega2[0]) / (2 * math.pi),
                                                     rel=0.02)
     # slip amplitudes vs the one-mode approximation |g.phi| |phi_d| F / (2 zeta omega^2)
-    from cases.double_beam import build_double_beam
+    from cases.double_beam.model import build_double_beam
     model = build_double_beam()
     w, phi = model.modes(e1.case.fe_mode)
     l = e1.case.fe_mode - 1

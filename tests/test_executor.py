@@ -9,9 +9,9 @@ import warnings
 import numpy as np
 import pytest
 
-from cases.executor_cli import add_executor_arguments, executor_from_args
-from fe import executor as ex
-from fe.executor import ExecutorSpec, run_sweep, task_seeds
+from cli.executor_options import add_executor_arguments, executor_from_args
+from runs import executor as ex
+from runs.executor import ExecutorSpec, run_sweep, task_seeds
 from joints.iwan import IwanParameters, describing_function, dissipation_per_cycle
 from joints.jenkins import discretize, jenkins_update
 
@@ -249,4 +249,4 @@ def test_module_does_not_leak_environment():
     before = {k: os.environ.get(k) for k in ex._ONE_THREAD}
     run_sweep(failing, [0, 1], executor="processes", workers=1, progress=False)
     assert {k: os.environ.get(k) for k in ex._ONE_THREAD} == before
-    assert "fe.executor" in sys.modules
+    assert "runs.executor" in sys.modules

@@ -127,7 +127,7 @@ def test_bad_input(tmp_path, two_strips_three_modes):
 
 
 def test_cli_export_bad_suffix(capsys):
-    from cases.cli import main
+    from cli.main import main
 
     assert main(["export", "--case", "double-beam", "--out", "modes.vtk"]) == 2
     err = capsys.readouterr().err
@@ -138,8 +138,8 @@ def test_cli_export_bad_suffix(capsys):
 
 @pytest.mark.parametrize("suffix", [".vtu", ".xdmf"])
 def test_cli_export_double_beam(tmp_path, capsys, suffix):
-    db = pytest.importorskip("cases.double_beam")
-    from cases.cli import main
+    db = pytest.importorskip("cases.double_beam.model")
+    from cli.main import main
 
     out = tmp_path / f"db{suffix}"
     assert main(["export", "--case", "double-beam", "--out", str(out), "--modes", "4"]) == 0

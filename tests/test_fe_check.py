@@ -6,15 +6,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cases.cli import main
-from cases.double_beam import (
+from cli.main import main
+from cases.double_beam.model import (
     CALIBRATED_CLAMP_LENGTH,
     MEASURED_FREQUENCY_HZ,
     DoubleBeamConfig,
     bending_mode_frequency,
     build_double_beam,
 )
-from cases.fe_check import (
+from cases.double_beam.fe_check import (
     MEASURED_OMEGA2,
     double_beam_fe_check,
     format_fe_check_md,

@@ -1,11 +1,11 @@
-"""FRF files: CSV and UFF 58 readers/writers (cases.frf_io)."""
+"""FRF files: CSV and UFF 58 readers/writers (ident.frf_files)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cases.errors import InputError
-from cases.frf_io import FRFSet, read_frf, read_frf_csv, write_frf, write_frf_csv, write_frf_uff
+from ident.errors import InputError
+from ident.frf_files import FRFSet, read_frf, read_frf_csv, write_frf, write_frf_csv, write_frf_uff
 
 
 def random_set(n=41, points=("1+Z", "7+Z", "12-Y"), seed=0, **kw):

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from cases.lumped10 import LumpedParameters, force_vector, lumped10_bank, lumped10_system
+from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from fe.harmonic_balance import HBSettings, _synthesis, aft_joint_force, solve_hb
 from fe.newmark import NewmarkSettings, integrate
 from fe.reduction import JointBank, JointedSystem, reduced_basis
@@ -82,7 +82,7 @@ def test_hb_matches_newmark_steady_state(lumped):
     for f_hz in (61.0, 62.0):
         w = 2 * np.pi * f_hz
         sol = solve_hb(m, bank, load, w, HBSettings(n_harmonics=7, n_time=256))
-        # Newmark with pre-warped drive (see fe.stepped_sine), from rest, 400 periods
+        # Newmark with pre-warped drive (see runs.stepped_sine), from rest, 400 periods
         wp = w * np.pi / (N * np.tan(np.pi / N))
         dt = 2 * np.pi / (wp * N)
         e = np.cos(wp * dt * np.arange(400 * N + 1))

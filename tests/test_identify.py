@@ -1,4 +1,4 @@
-"""Modal identification from FRFs (cases.identify) and ``iwanfe identify``.
+"""Modal identification from FRFs (ident.identify) and ``iwanfe identify``.
 
 Truth: FRFs of linear modal systems with proportional viscous damping,
 ``H_p(w) = sum_r phi_pr phi_0r / (w_r^2 - w^2 + 2 i zeta_r w_r w)`` (receptance, drive
@@ -14,10 +14,10 @@ import json
 import numpy as np
 import pytest
 
-from cases.cli import main
-from cases.frf_io import FRFSet, write_frf
-from cases.identify import identify, identify_modes, mac, match_modes, modal_data_from_levels
-from cases.measured import read_measured
+from cli.main import main
+from ident.frf_files import FRFSet, write_frf
+from ident.identify import identify, identify_modes, mac, match_modes, modal_data_from_levels
+from ident.measured import read_measured
 
 FREQ = np.arange(20.0, 500.0 + 1e-9, 0.5)        # 0.5 Hz lines
 

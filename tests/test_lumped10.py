@@ -1,4 +1,4 @@
-"""The paper's 10-DOF study (cases.lumped10) and ``iwanfe reproduce lumped``."""
+"""The paper's 10-DOF study (cases.lumped10.model) and ``iwanfe reproduce lumped``."""
 import csv
 import json
 from pathlib import Path
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import scipy.linalg as la
 
-from cases.cli import main
-from cases.lumped10 import (TABLE1_TEXT, TABLE2_TEXT, LumpedParameters, fit_improved,
+from cli.main import main
+from cases.lumped10.model import (TABLE1_TEXT, TABLE2_TEXT, LumpedParameters, fit_improved,
                             force_vector, lumped10_system, mode_topology, paper_table)
 from fe.modal import normal_modes
 from joints.iwan import IwanParameters, describing_function

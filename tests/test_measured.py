@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cases.errors import InputError
-from cases.measured import MeasuredData, read_measured, write_measured
+from ident.errors import InputError
+from ident.measured import MeasuredData, read_measured, write_measured
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -193,7 +193,7 @@ def test_warning_nonconstant_excitation_ratio(tmp_path):
 
 
 def _run_module(*args):
-    return subprocess.run([sys.executable, "-m", "cases.measured", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "ident.measured", *map(str, args)],
                           capture_output=True, text=True, cwd=ROOT, timeout=60)
 
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from cases.lumped10 import LumpedParameters, force_vector, lumped10_bank, lumped10_system
+from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from fe.newmark import NewmarkSettings, NewmarkState, integrate
 from fe.reduction import JointBank, reduced_basis
 from joints.iwan import dissipation_per_cycle

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cases.measured import read_measured
+from ident.measured import read_measured
 from cases.paper_data import (
     DATA_FILE,
     MODE_LABEL,

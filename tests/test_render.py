@@ -220,7 +220,7 @@ def test_probe_reports_a_crashing_gl_instead_of_crashing(tmp_path):
 
 
 def test_cli_render_rejects_bad_input(capsys):
-    from cases.cli import main
+    from cli.main import main
 
     assert main(["render", "--case", "double-beam", "--mode", "0", "--out", "a.png"]) == 2
     assert "--mode must be >= 1" in capsys.readouterr().err
@@ -230,10 +230,10 @@ def test_cli_render_rejects_bad_input(capsys):
 
 
 def test_cli_render_double_beam(offscreen, tmp_path):
-    pytest.importorskip("cases.double_beam")
+    pytest.importorskip("cases.double_beam.model")
     out = tmp_path / "m2.png"
     start = time.perf_counter()
-    proc = run_child("import sys; from cases.cli import main; sys.exit(main(sys.argv[1:]))",
+    proc = run_child("import sys; from cli.main import main; sys.exit(main(sys.argv[1:]))",
                      "render", "--case", "double-beam", "--mode", "2", "--out", str(out),
                      "--size", "640", "360")
     wall = time.perf_counter() - start
@@ -242,14 +242,14 @@ def test_cli_render_double_beam(offscreen, tmp_path):
     assert "mode 2" in proc.stdout and " Hz" in proc.stdout
     assert wall < 30.0
     # mode number beyond the model's modes: one-line error, exit 2
-    from cases.cli import main
+    from cli.main import main
 
     assert main(["render", "--mode", "100000", "--out", str(tmp_path / "x.png")]) == 2
 
 
 def test_drawn_interface_slip_equals_double_beam_joint_slip():
     """The step between the fibres drawn at the interface is the model's glue slip."""
-    db = pytest.importorskip("cases.double_beam")
+    db = pytest.importorskip("cases.double_beam.model")
     model = db.build_double_beam(db.DoubleBeamConfig())
     omega, shapes = model.modes(5)
     lower, upper = model.strips

@@ -1,12 +1,12 @@
-"""Stepped-sine campaigns (fe.stepped_sine): protocols and resumable storage."""
+"""Stepped-sine campaigns (runs.stepped_sine): protocols and resumable storage."""
 import json
 
 import numpy as np
 import pytest
 
-from cases.lumped10 import LumpedParameters, force_vector, lumped10_bank, lumped10_system
+from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from fe.reduction import JointBank, reduced_basis
-from fe.stepped_sine import (Campaign, NewmarkProtocol, PaperProtocol,
+from runs.stepped_sine import (Campaign, NewmarkProtocol, PaperProtocol,
                              run_campaign)
 
 

@@ -1,7 +1,7 @@
 """fe/store.py: a store accepts only its own sweep; the manifest survives a crash."""
 import pytest
 
-from fe.store import open_manifest, write_manifest
+from runs.store import open_manifest, write_manifest
 
 
 def test_new_store_then_reopen_then_refuse_another_sweep(tmp_path):

@@ -1,4 +1,4 @@
-"""Scale and speed: campaigns through fe.executor (serial, processes, dask cluster:
+"""Scale and speed: campaigns through runs.executor (serial, processes, dask cluster:
 bitwise the same numbers), the compiled Newmark loop on the Jenkins kernel (bitwise
 the joint forces of jenkins_update), the exact first-harmonic balance with continuous
 Iwan joints against an independent scalar root, and the full (unreduced) model."""
@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from cases.lumped10 import LumpedParameters, force_vector, lumped10_bank, lumped10_system
-from fe.executor import ExecutorSpec
+from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
+from runs.executor import ExecutorSpec
 from fe.harmonic_balance import (HBSettings, _ExactIwan, _iwan_df, continuation_exact,
                                  solve_hb, solve_hb_exact)
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, integrate
 from fe.reduction import JointedSystem, full_model, reduced_basis
-from fe.stepped_sine import Campaign, NewmarkProtocol, run_campaign
+from runs.stepped_sine import Campaign, NewmarkProtocol, run_campaign
 from joints.iwan import IwanParameters, describing_function
 from joints.jenkins import jenkins_update
 
@@ -250,7 +250,7 @@ def test_reproduce_lumped_command_on_a_process_pool_equals_serial(tmp_path, caps
     """``iwanfe reproduce lumped --executor processes --workers 2`` prints the same
     numbers (chi, R errors, Tables 1-2, identified modes) as the serial run, bit for bit
     in the JSON; contradictory options are one-line errors."""
-    from cases.cli import main
+    from cli.main import main
 
     common = ["reproduce", "lumped", "--bands-only", "--n-sliders", "20", "--json",
               "--no-progress"]
@@ -266,7 +266,7 @@ def test_reproduce_lumped_command_on_a_process_pool_equals_serial(tmp_path, caps
 
 
 def test_convergence_meshes_on_a_process_pool_equal_serial():
-    """The double-beam mesh loop of cases.convergence through fe.executor.run_sweep: a
+    """The double-beam mesh loop of cases.convergence through runs.executor.run_sweep: a
     2-process pool gives the serial numbers exactly (two strip meshes, two joint meshes)."""
     from cases.convergence import double_beam_study
 

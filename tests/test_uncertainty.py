@@ -1,10 +1,10 @@
-"""Monte Carlo over the identified joint parameters (cases.uncertainty) and
+"""Monte Carlo over the identified joint parameters (cases.double_beam.uncertainty) and
 ``iwanfe uncertainty``.
 
-Truths used: the estimator's own delta-method t-intervals (cases.estimate, checked here
+Truths used: the estimator's own delta-method t-intervals (inverse.estimate, checked here
 to come from the closed form written out below), the chi-square law of sums of squared
 normal draws and the F law of the Mahalanobis distance of Student-t draws, the
-Student-t mass of the Iwan range, run_study (cases.double_beam_reproduction) at the
+Student-t mass of the Iwan range, run_study (cases.double_beam.study) at the
 same settings, and the default settings of ``reproduce double-beam``. FE samples use a
 coarse 7-level study (1 Hz lines over 240-264 Hz) to stay fast.
 """
@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from scipy import stats
 
-import cases.uncertainty as unc
-from cases.cli import main
-from cases.double_beam import build_double_beam
-from cases.double_beam_reproduction import DoubleBeamStudy, measured_levels, run_study
-from cases.estimate import kappa_ratio, zeta_with_joint
-from fe.executor import ExecutorSpec, task_seeds
+import cases.double_beam.uncertainty as unc
+from cli.main import main
+from cases.double_beam.model import build_double_beam
+from cases.double_beam.study import DoubleBeamStudy, measured_levels, run_study
+from inverse.estimate import kappa_ratio, zeta_with_joint
+from runs.executor import ExecutorSpec, task_seeds
 
 COARSE = dataclasses.replace(unc.SAMPLE_STUDY, n_levels=7, df_hz=1.0, band_hz=(240.0, 264.0),
                              sliders_per_octave=6, n_modes=20)
@@ -58,7 +58,7 @@ def same(a, b):
 
 
 def closed_form(est, p, ln_kt):
-    """The ``exact`` method's predictions (cases.estimate eq. 2, 43 and eq. 3 with the
+    """The ``exact`` method's predictions (inverse.estimate eq. 2, 43 and eq. 3 with the
     fit's anchors): omega^2 = omega2_lin - (kappa2/|kappa1|) Delta c, zeta from eq. 2,
     Delta c = (Kt/p) r^p."""
     r = np.array([p_["excitation"] for p_ in est.predictions])

@@ -1,7 +1,7 @@
 """Double-beam reproduction pictures: measured vs simulated per level, joint amplitudes.
 
 Draws the arrays it is given (matplotlib, Agg backend); computes no physics. The study
-(:mod:`cases.double_beam_reproduction`) supplies the identified frequencies and damping
+(:mod:`cases.double_beam.study`) supplies the identified frequencies and damping
 ratios, the estimator's predictions, the simulated joint slips and the modal-filter
 joint damping.
 """

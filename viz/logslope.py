@@ -1,7 +1,7 @@
 """Fig. 8-style picture: log of successive damping differences against level.
 
 Draws the arrays it is given (matplotlib, Agg backend); computes no physics. The
-estimator (:mod:`cases.estimate`) supplies ``y = log_z Delta d`` of the differences it
+estimator (:mod:`inverse.estimate`) supplies ``y = log_z Delta d`` of the differences it
 used, those it did not (outside the fit levels), those it could not log (<= 0, drawn
 as markers on the lower axis edge) and the fitted curve (paper eq. 35: a straight
 line of slope ``chi + 1`` when the excitation ratio is constant).

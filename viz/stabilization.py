@@ -1,7 +1,7 @@
 """Stabilization diagram: poles of every model order over the mode-indicator function.
 
 Draws the arrays it is given (matplotlib, Agg backend); computes no physics. The
-identifier (:mod:`cases.identify`) supplies, for every pole, its model order, its
+identifier (:mod:`ident.identify`) supplies, for every pole, its model order, its
 undamped natural frequency and a status code (0 new, 1 stable in frequency, 2 also in
 damping, 3 also in mode shape), the mode-indicator function ``sum_o |H_o|^2`` and the
 frequencies of the modes it selected.

@@ -1,7 +1,7 @@
 """Monte Carlo bands of predicted frequency and damping against level.
 
 Draws the arrays it is given (matplotlib, Agg backend); computes no physics. The
-sweep (:mod:`cases.uncertainty`) supplies the per-level sample quantiles, the nominal
+sweep (:mod:`cases.double_beam.uncertainty`) supplies the per-level sample quantiles, the nominal
 FE prediction, the estimator's closed-form prediction with its delta-method interval
 and the measured values.
 """

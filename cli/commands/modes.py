@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from cases.jsonio import print_json
+from runs.jsonio import print_json
 
 CASES = ("double-beam",)
 
@@ -46,7 +46,7 @@ def register(subparsers) -> None:
 def double_beam_report(band=(50.0, 450.0), contact=None, element_size=None, joints=None,
                        uncalibrated=False) -> dict:
     """Modes of the double beam in ``band`` plus the calibration statement (a dict)."""
-    from cases import double_beam as db
+    from cases.double_beam import model as db
 
     lo, hi = (float(v) for v in band)
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):

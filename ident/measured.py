@@ -16,7 +16,7 @@ column                 required  meaning
 ``x_*``                no        free user annotations, kept and otherwise ignored
 =====================  ========  ==========================================================
 
-Every violated rule raises :class:`cases.errors.InputError` with one line
+Every violated rule raises :class:`ident.errors.InputError` with one line
 ``FILE:LINE:COLUMN: message``, where ``LINE`` is the 1-based line number in the file
 (the header is line 1, the first data row line 2) and ``COLUMN`` is the column *name*
 as written in the header (for a rule about a whole row, the column the rule is about:
@@ -31,7 +31,7 @@ Warnings (kept in :attr:`MeasuredData.warnings`, never raised): a ``zeta`` colum
 median exceeds 0.2 (looks like percent) and, per mode, excitation ratios between
 successive levels that differ from their median by more than 5 %.
 
-Run ``python -m cases.measured FILE`` to validate a file: it prints a summary and the
+Run ``python -m ident.measured FILE`` to validate a file: it prints a summary and the
 warnings, or one error line on stderr with exit status 2.
 """
 from __future__ import annotations
@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.errors import InputError
+from ident.errors import InputError
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
 OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order")
@@ -220,7 +220,7 @@ def read_measured(path) -> MeasuredData:
 
     Raises
     ------
-    cases.errors.InputError
+    ident.errors.InputError
         One line ``FILE:LINE:COLUMN: message`` for the first violated rule.
     """
     path = Path(path)
@@ -361,10 +361,10 @@ def summary(data: MeasuredData) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m cases.measured FILE...``: validate, print summary and warnings."""
+    """``python -m ident.measured FILE...``: validate, print summary and warnings."""
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help"):
-        print("usage: python -m cases.measured FILE...\n"
+        print("usage: python -m ident.measured FILE...\n"
               "Validate measured-data CSV files (shared/spec/measured-data.md).")
         return 0 if argv else 2
     for name in argv:

@@ -13,14 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
-from cases.errors import InputError
-from cases.jsonio import print_json, to_jsonable
-from cases.measured import read_measured
+from inverse.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
+from ident.errors import InputError
+from runs.jsonio import print_json, to_jsonable
+from ident.measured import read_measured
+from cases.paper_data import DATA_FILE
 
 NAME = "diagnose"
-SHIPPED = {"double-beam": Path(__file__).resolve().parent.parent / "data"
-           / "double_beam_measured.csv"}
+SHIPPED = {"double-beam": DATA_FILE}
 
 
 def register(subparsers) -> None:
@@ -122,7 +122,7 @@ def format_text(result: dict, source: str) -> str:
         lines.append(f"synthetic truth: cause {t['cause']}, effect size "
                      f"{t['effect_size']:.3g}, chi {t['chi']:.3f}")
     if "fe_check" in r:
-        from cases.fe_check import format_fe_check
+        from cases.double_beam.fe_check import format_fe_check
 
         lines.extend(format_fe_check(r["fe_check"]))
     return "\n".join(lines)
@@ -216,7 +216,7 @@ in units of the noise level (grey band: +/- 2).
 {warn}
 """
     if "fe_check" in r:
-        from cases.fe_check import format_fe_check_md
+        from cases.double_beam.fe_check import format_fe_check_md
 
         md += "\n" + format_fe_check_md(r["fe_check"])
     report = out / "report.md"
@@ -231,7 +231,7 @@ def run(args) -> int:
     if truth is not None:
         result["synthetic_truth"] = truth
     if args.case == "double-beam":
-        from cases.fe_check import double_beam_fe_check
+        from cases.double_beam.fe_check import double_beam_fe_check
 
         level1 = data.for_mode(result["mode"]) if "mode" in result else data
         result["fe_check"] = double_beam_fe_check(measured_omega2=float(level1.omega2[0]))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from cases.estimate import (
+from inverse.estimate import (
     CASES,
     DEFAULT_CONFIDENCE,
     DEFAULT_FORCE_SCALE,
@@ -18,8 +18,8 @@ from cases.estimate import (
     estimate,
     format_table,
 )
-from cases.jsonio import print_json
-from cases.measured import read_measured
+from runs.jsonio import print_json
+from ident.measured import read_measured
 
 NAME = "estimate"
 
@@ -63,7 +63,7 @@ def register(subparsers) -> None:
 
 
 def plot_estimate(est, path: str, title: str | None = None) -> None:
-    """Draw the Fig. 8-style log-slope plot of an :class:`~cases.estimate.Estimate`."""
+    """Draw the Fig. 8-style log-slope plot of an :class:`~inverse.estimate.Estimate`."""
     from viz.logslope import plot_logslope
 
     used = sorted(est.points_used, key=lambda p: p["x"])

@@ -414,8 +414,8 @@ class ModeResult:
     zeta: np.ndarray                  # (12,) identified damping ratio
     table1: np.ndarray                # (12, 2) joint amplitudes at the identified resonance
     fit_levels: list
-    paper_estimate: object            # cases.estimate.Estimate (method "paper")
-    amplitude_estimate: object        # cases.estimate.Estimate (method "amplitude")
+    paper_estimate: object            # inverse.estimate.Estimate (method "paper")
+    amplitude_estimate: object        # inverse.estimate.Estimate (method "amplitude")
     B_inverse: float
     B_simulated: float
     R_paper: float
@@ -431,7 +431,7 @@ class LumpedReport:
     study: LumpedStudy
     protocol: str
     topology: ModeTopology
-    campaign: object                  # fe.stepped_sine.CampaignResult
+    campaign: object                  # runs.stepped_sine.CampaignResult
     modes: dict                       # mode -> ModeResult
     R_true: float
     chi_true: float
@@ -493,7 +493,7 @@ class LumpedReport:
 
 
 def _identify_level(freq, rec, band, target_hz):
-    from cases.identify import identify_modes
+    from ident.identify import identify_modes
 
     sel = (freq >= band[0]) & (freq <= band[1])
     try:
@@ -520,20 +520,20 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
         resolution).
     store : path, optional
         Parent directory of the campaign store ``campaign-<protocol>-<hash12>``
-        (resumable; see :func:`fe.stepped_sine.run_campaign`).
+        (resumable; see :func:`runs.stepped_sine.run_campaign`).
     progress : bool
         tqdm bars on stderr.
     workers : int
         Without ``executor``: levels computed in that many local processes.
-    executor : str or fe.executor.ExecutorSpec, optional
-        Where the levels run (:func:`fe.stepped_sine.run_campaign`; e.g.
-        :func:`cases.executor_cli.executor_from_args`); results are bitwise the same.
+    executor : str or runs.executor.ExecutorSpec, optional
+        Where the levels run (:func:`runs.stepped_sine.run_campaign`; e.g.
+        :func:`cli.executor_options.executor_from_args`); results are bitwise the same.
     """
     import time as _time
 
-    from cases.estimate import b_tilde, estimate, kappa1_per_R, r_tilde
-    from cases.measured import MeasuredData
-    from fe.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
+    from inverse.estimate import b_tilde, estimate, kappa1_per_R, r_tilde
+    from ident.measured import MeasuredData
+    from runs.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
                                  run_campaign, run_level)
 
     protocols = {"default": HBProtocol(), "hb": HBProtocol(), "newmark": NewmarkProtocol(),
@@ -553,7 +553,7 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
     if store is not None:
         from pathlib import Path
 
-        from fe.stepped_sine import campaign_hash
+        from runs.stepped_sine import campaign_hash
         store = Path(store) / f"campaign-{proto.name}-{campaign_hash(model, bank, camp)[:12]}"
     res = run_campaign(model, bank, camp, store=store, progress=progress,
                        workers=None if executor is not None else workers, executor=executor)

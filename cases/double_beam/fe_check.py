@@ -1,8 +1,8 @@
 """FE-level check of the double beam: measured vs simulated absolute frequency.
 
-The diagnosis (:mod:`cases.diagnose`) looks at how the measured mode changes with the
+The diagnosis (:mod:`inverse.diagnose`) looks at how the measured mode changes with the
 force; this module looks at where it is. It takes the *uncalibrated* double-beam model
-(:mod:`cases.double_beam` with ``clamp_length = 0``, every other default), compares the
+(:mod:`cases.double_beam.model` with ``clamp_length = 0``, every other default), compares the
 frequency of the measured mode (4th in-phase bending, :data:`MEASURED_BENDING_ORDER`)
 with the measurement (omega^2 = 2.50677e6 rad^2/s^2 at level 1, 252.0 Hz) and, for each
 candidate cause of the gap, varies one physical parameter:
@@ -67,7 +67,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import brentq
 
-from cases.double_beam import (
+from cases.double_beam.model import (
     MEASURED_BENDING_ORDER,
     UNCALIBRATED_CLAMP_LENGTH,
     DoubleBeamConfig,

@@ -1,16 +1,16 @@
 """Monte Carlo over the identified joint parameters: how uncertain are the predictions?
 
 ``iwanfe estimate`` fits chi and ``|kappa1| B`` to the damping growth between levels
-(paper eq. 33-35, :mod:`cases.estimate`) and gives linearized (delta-method) Student-t
+(paper eq. 33-35, :mod:`inverse.estimate`) and gives linearized (delta-method) Student-t
 intervals. This module propagates the same fit uncertainty through the *nonlinear FE
 model* instead of the closed form (eq. 43, 46): every sample is a joint of the double
-beam (:mod:`cases.double_beam_reproduction`) driven through the stepped-sine levels, and
+beam (:mod:`cases.double_beam.study`) driven through the stepped-sine levels, and
 the spread of the simulated natural frequency and damping ratio per level is reported
 beside the estimator's closed-form interval and the measurement.
 
-Sampling (one task of :func:`fe.executor.run_sweep` per sample)
+Sampling (one task of :func:`runs.executor.run_sweep` per sample)
 ---------------------------------------------------------------
-The estimator's least-squares fit of eq. 3 of :mod:`cases.estimate` gives ``x^ = (p^,
+The estimator's least-squares fit of eq. 3 of :mod:`inverse.estimate` gives ``x^ = (p^,
 ln Kt^)`` with ``p = chi + 1`` and ``Kt = p |kappa1| B`` (its own parametrization, in
 which it linearizes), the covariance ``C = s^2 (J^T J)^-1`` and ``nu = n - 2`` residual
 degrees of freedom. Under the linearized Gaussian regression ``x`` given the data is a
@@ -21,9 +21,9 @@ pivot behind the estimator's t-intervals; the posterior under a flat prior)::
 
 (``distribution="normal"``: ``w = nu``, i.e. ``x ~ N(x^, C)``). For every linear
 function ``g = a . x`` the draws are ``g(x^) + sqrt(a^T C a) T_nu``: their quantiles are
-exactly the delta-method t-interval of :mod:`cases.estimate`; for nonlinear predictions
+exactly the delta-method t-interval of :mod:`inverse.estimate`; for nonlinear predictions
 they are not, which is the point of the sweep. Each task draws with its own
-``np.random.default_rng(seed)`` from :func:`fe.executor.task_seeds`, so the samples are
+``np.random.default_rng(seed)`` from :func:`runs.executor.task_seeds`, so the samples are
 bitwise the same on every executor, and ``task_seeds(seed, n)[i]`` does not depend on
 ``n``: a run with more samples extends a finished one.
 
@@ -35,15 +35,15 @@ t mass lies outside.
 
 Joint of a sample (paper eq. 36, 37): ``chi = p - 1``, ``|kappa1| B = Kt / p`` at level 1
 and ``R~ = |kappa1| B / ((|kappa1|/R) B~(chi))`` with the estimator's ``B~`` (FE mode,
-linear-inverse slips at level 1); then exactly :func:`~cases.double_beam_reproduction.
+linear-inverse slips at level 1); then exactly :func:`~cases.double_beam.study.
 joint_setup` with these ``chi, R`` overrides (the viscous damping is re-chosen so that
-level 1 has the measured damping ratio, eq. 2 of :mod:`cases.estimate`). The *nominal*
-sample is the study without overrides, i.e. :func:`~cases.double_beam_reproduction.
+level 1 has the measured damping ratio, eq. 2 of :mod:`inverse.estimate`). The *nominal*
+sample is the study without overrides, i.e. :func:`~cases.double_beam.study.
 run_study` at the same settings.
 
-Per sample: :func:`~cases.double_beam_reproduction.nonlinear_model`, the HB stepped-sine
-campaign (:func:`fe.stepped_sine.run_campaign`, serial inside the task) and the per-level
-modal data (:func:`~cases.double_beam_reproduction.identify_campaign`). The reported
+Per sample: :func:`~cases.double_beam.study.nonlinear_model`, the HB stepped-sine
+campaign (:func:`runs.stepped_sine.run_campaign`, serial inside the task) and the per-level
+modal data (:func:`~cases.double_beam.study.identify_campaign`). The reported
 frequency ``Omega/(2 pi)`` (Hz) and damping ratio are the **modal filter**'s
 (``D = phi_d / (phi^T M x)`` at the root of ``Re D``; identification-free and exact for
 the linear structure): on smooth simulated FRFs of some samples the LSCF identification
@@ -88,7 +88,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy import stats
 
-from cases.double_beam_reproduction import (
+from cases.double_beam.study import (
     DoubleBeamStudy,
     identify_campaign,
     joint_setup,
@@ -98,9 +98,9 @@ from cases.double_beam_reproduction import (
     nonlinear_model,
     source_estimate,
 )
-from cases.estimate import r_tilde
-from fe.executor import ExecutorSpec, run_sweep, task_seeds
-from fe.store import open_manifest
+from inverse.estimate import r_tilde
+from runs.executor import ExecutorSpec, run_sweep, task_seeds
+from runs.store import open_manifest
 from fe.harmonic_balance import HBSettings
 
 __all__ = [
@@ -193,7 +193,7 @@ class ParameterDistribution:
 
     @classmethod
     def from_fit(cls, fit, kind: str = "t", scale: float = 1.0) -> "ParameterDistribution":
-        """From a :class:`cases.estimate.PowerLawFit` (``p``, ``ln_kt``, ``cov``, ``dof``).
+        """From a :class:`inverse.estimate.PowerLawFit` (``p``, ``ln_kt``, ``cov``, ``dof``).
 
         ``kind`` ``"t"`` (Student, the fit's dof) or ``"normal"``; ``scale`` multiplies
         the standard deviations (``scale**2`` the covariance; 0 gives the nominal point).
@@ -266,7 +266,7 @@ class UncertaintySettings:
     n_samples : int
         Samples (each one nonlinear simulation) besides the nominal one.
     seed : int
-        Root seed of :func:`fe.executor.task_seeds`.
+        Root seed of :func:`runs.executor.task_seeds`.
     confidence : float
         Central interval of the samples (quantiles ``(1 -+ confidence)/2``) and level
         of the estimator's delta-method t-interval.
@@ -342,7 +342,7 @@ def simulate_fe(inputs: SweepInputs, p=None, ln_kt=None) -> dict:
     236 Hz) the retry converged and levels 1-9 moved by < 2e-13 relative (frequency
     and damping ratio).
     """
-    from fe.stepped_sine import run_campaign
+    from runs.stepped_sine import run_campaign
 
     model, data, study = inputs.model, inputs.data, inputs.study
     src = source_estimate(model, data, study)
@@ -529,7 +529,7 @@ def run_samples(inputs: SweepInputs, n_samples: int, seed: int, store: SampleSto
                 on_sample: Callable[[SampleResult], None] | None = None
                 ) -> tuple[SampleResult, list[SampleResult]]:
     """The nominal sample and samples ``0 .. n_samples-1``, each a task of
-    :func:`fe.executor.run_sweep` (seeds :func:`fe.executor.task_seeds`).
+    :func:`runs.executor.run_sweep` (seeds :func:`runs.executor.task_seeds`).
 
     Finished samples in ``store`` are loaded, the others computed and saved as each one
     finishes (``on_sample(result)`` is called after the save; an exception raised there
@@ -732,12 +732,12 @@ def run_uncertainty(settings: UncertaintySettings = UncertaintySettings(), out=N
     settings : UncertaintySettings
     out : path, optional
         Parent of the sample store ``samples-<hash12>/``; None: nothing stored.
-    executor : {"serial", "processes", "dask"} or fe.executor.ExecutorSpec
+    executor : {"serial", "processes", "dask"} or runs.executor.ExecutorSpec
         Where the samples run (bitwise the same results).
     progress : bool
         Progress bar on stderr.
-    model : cases.double_beam.DoubleBeamModel, optional
-        Default :func:`cases.double_beam.build_double_beam`.
+    model : cases.double_beam.model.DoubleBeamModel, optional
+        Default :func:`cases.double_beam.model.build_double_beam`.
     simulate : callable
         Per-sample model (:class:`SweepInputs`); default :func:`simulate_fe`.
     on_sample : callable, optional
@@ -747,7 +747,7 @@ def run_uncertainty(settings: UncertaintySettings = UncertaintySettings(), out=N
     -------
     UncertaintyReport
     """
-    from cases.double_beam import build_double_beam
+    from cases.double_beam.model import build_double_beam
 
     t0 = time.perf_counter()
     st = settings.study

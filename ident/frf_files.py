@@ -15,7 +15,7 @@ CSV format (written and read here)::
   of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
   a comma; points keep the order of their ``re_`` columns. No other columns.
 
-Errors are :class:`cases.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
+Errors are :class:`ident.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
 column name), like the measured-data reader.
 
 UFF 58 (universal file, via pyuff): every data set 58 with function type 4 (FRF) is a
@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.errors import InputError
+from ident.errors import InputError
 
 QUANTITIES = ("receptance", "mobility", "accelerance")
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}

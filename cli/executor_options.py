@@ -1,9 +1,9 @@
-"""Command-line options that choose where a sweep runs (see :mod:`fe.executor`).
+"""Command-line options that choose where a sweep runs (see :mod:`runs.executor`).
 
 A command that runs a sweep adds the options and turns them into an
-:class:`fe.executor.ExecutorSpec`::
+:class:`runs.executor.ExecutorSpec`::
 
-    from cases.executor_cli import add_executor_arguments, executor_from_args
+    from cli.executor_options import add_executor_arguments, executor_from_args
 
     def register(subparsers):
         p = subparsers.add_parser("reproduce", ...)
@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import argparse
 
-from fe.executor import ExecutorSpec
+from runs.executor import ExecutorSpec
 
 __all__ = ["add_executor_arguments", "executor_from_args", "int_at_least"]
 
@@ -70,7 +70,7 @@ def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def executor_from_args(args: argparse.Namespace) -> ExecutorSpec:
-    """The :class:`~fe.executor.ExecutorSpec` chosen by the options.
+    """The :class:`~runs.executor.ExecutorSpec` chosen by the options.
 
     Raises
     ------

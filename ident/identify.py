@@ -728,9 +728,9 @@ def modal_data_from_levels(excitation, results, run_order=None, sources=None):
 
     Returns
     -------
-    cases.measured.MeasuredData
+    ident.measured.MeasuredData
     """
-    from cases.measured import MeasuredData
+    from ident.measured import MeasuredData
 
     excitation = np.asarray(excitation, float)
     L = excitation.size

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cases.commands.render import CASES, build_case_model, case_modes
+from cli.commands.render import CASES, build_case_model, case_modes
 
 
 def register(subparsers) -> None:

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from cases.jsonio import print_json
+from runs.jsonio import print_json
 from joints.iwan import (
     IwanParameters,
     backbone,

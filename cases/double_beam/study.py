@@ -10,11 +10,11 @@ Pipeline (``iwanfe reproduce double-beam``; :func:`run_study`)::
 
 Decisions (each is stated in the report and justified here)
 -----------------------------------------------------------
-Joints. The FE model (:mod:`cases.double_beam`) carries one tangential joint per glue
+Joints. The FE model (:mod:`cases.double_beam.model`) carries one tangential joint per glue
 node with a share ``w_m = k_m / K_T`` of the stuck glue stiffness ``K_T = 1e8 N/m``.
 Each becomes a four-parameter Iwan element with the same ``chi`` and the same share of
 ``R`` and ``S`` (``R_m = w_m R``), hence the same ``phi_max``: this is exactly the
-model :func:`cases.estimate.b_tilde` assumes (eq. 1 of :mod:`cases.estimate`), so the
+model :func:`inverse.estimate.b_tilde` assumes (eq. 1 of :mod:`inverse.estimate`), so the
 simulation is the model the method identifies from the measurements. ``chi`` and
 ``R = R~`` come from the ``exact`` estimate of measured levels 1-7 (exact kappa2, eq.
 45 with its factor 2, B~ from the linear inverse at the stated force scale).
@@ -31,7 +31,7 @@ any ``beta > 0`` moves macro-slip to lower levels.
 
 Force scale. The paper gives drive voltages (5 mV .. 2.56 V), never newtons; the
 force is ``force_scale * voltage`` with ``force_scale`` = 1 N/V (the estimator's
-:data:`cases.estimate.DEFAULT_FORCE_SCALE`), a stated assumption. It cannot be
+:data:`inverse.estimate.DEFAULT_FORCE_SCALE`), a stated assumption. It cannot be
 calibrated from the data and it does not matter: B~ scales as ``s^(chi+1)`` so R~ as
 ``s^-(chi+1)``, and by (1) ``phi_max`` as ``s``; the Iwan density ``R phi^chi`` on
 ``(0, phi_max)`` under ``phi -> s phi``, ``R -> s^-(chi+1) R`` maps the joint force of a
@@ -44,13 +44,13 @@ for all of them.
 Viscous damping. Modal damping ``C_r = diag(2 zeta_v omega_r)`` on the reduced basis
 with ``zeta_v`` such that the simulated level 1 has the measured ``zeta_1`` = 1.2780 %:
 ``zeta_v = (zeta_1 - Delta c_1 / (2 Omega_1^2)) Omega_1 / omega_n`` (eq. 2 of
-:mod:`cases.estimate`; ``Delta c_1 = |kappa1| B`` of the estimate, ``Omega_1^2 =
+:mod:`inverse.estimate`; ``Delta c_1 = |kappa1| B`` of the estimate, ``Omega_1^2 =
 omega_n^2 - (kappa2/|kappa1|) Delta c_1``, ``omega_n`` the FE mode).
 
 Lines. The paper stepped 2 Hz over 50-450 Hz: 3 lines in the half-power band (6.4 Hz
 at 252 Hz and 1.28 %). The simulation steps 0.5 Hz over 236-268 Hz (65 lines, 13 in
 the half-power band), upward with harmonic-balance continuation
-(:class:`fe.stepped_sine.HBProtocol`: 7 harmonics, odd, 256 AFT samples); every level
+(:class:`runs.stepped_sine.HBProtocol`: 7 harmonics, odd, 256 AFT samples); every level
 starts from virgin joints. On the linear FRF the identifier with its default options
 returns zeta to 1e-10 relative on this grid and to 4e-6 on the paper's 2 Hz grid over
 50-450 Hz; the whole run takes seconds, so the finer grid costs nothing.
@@ -66,7 +66,7 @@ the exact four-parameter model (:func:`joints.iwan.describing_function`) from 1e
 ``phi_max`` to ``phi_max``, chi from -0.9 to -0.1; the uniform discretization of
 :func:`joints.jenkins.discretize` reaches 1.1e-3 there with 1000 sliders.
 
-Identification. LSCF + refinement (:func:`cases.identify.identify_modes`) of the
+Identification. LSCF + refinement (:func:`ident.identify.identify_modes`) of the
 receptance at the response DOF (Acc. 1, upper strip at the exciter) over the simulated
 lines, the mode nearest the FE mode, with uniform weights and without pseudo-modes. A
 nonlinear FRF is no modal model (the joint damping changes along the curve with the
@@ -82,12 +82,12 @@ proportionally damped structure), at the root of ``Re D``. Joint slip amplitudes
 resonance" are the campaign's half peak-to-peak slips interpolated (cubic spline over
 the lines) at the identified frequency.
 
-Estimates. ``paper``, ``exact`` and ``amplitude`` (:func:`cases.estimate.estimate`),
+Estimates. ``paper``, ``exact`` and ``amplitude`` (:func:`inverse.estimate.estimate`),
 levels 1-7 fitted and 8-10 predicted, on the measured data (the issue's question) and
 on the simulated data, LSCF and modal filter (where chi and R are known).
 ``amplitude`` regresses on the simulated joint amplitude at resonance, ``A_eff = sum_m
 q_m A_m / sum_m q_m`` with ``q_m = w_m (g_m . phi)^2`` (the weights of B, eq. 1 of
-:mod:`cases.estimate`), instead of assuming it grows as the drive. B~ (eq. 37) is given
+:mod:`inverse.estimate`), instead of assuming it grows as the drive. B~ (eq. 37) is given
 twice: from the linear inverse (the estimator's own, at the FE natural frequency and the
 level-1 damping) and from the nonlinear simulation (the simulated level-1 slip
 amplitudes at resonance), each with its R~. Reruns with ``R`` scaled by 0.1 and 0.01
@@ -121,10 +121,12 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from cases.paper_data import DATA_FILE
+
 import numpy as np
 import scipy.sparse as sp
 
-from cases.estimate import (
+from inverse.estimate import (
     DEFAULT_FORCE_SCALE,
     METHODS,
     b_tilde,
@@ -133,7 +135,7 @@ from cases.estimate import (
     parse_levels,
     r_tilde,
 )
-from cases.measured import MeasuredData, read_measured, write_measured
+from ident.measured import MeasuredData, read_measured, write_measured
 from fe.harmonic_balance import HBSettings
 from fe.modal import normal_modes
 from fe.reduction import JointBank, JointedSystem, ReducedModel, reduced_basis
@@ -172,7 +174,7 @@ __all__ = [
 ]
 
 #: The shipped measured data (paper Tables 3-6, cases/data/README.md).
-DEFAULT_DATA = Path(__file__).resolve().parent / "data" / "double_beam_measured.csv"
+DEFAULT_DATA = DATA_FILE
 #: Estimate whose chi and R~ drive the simulation.
 SOURCE_METHOD = "exact"
 
@@ -209,7 +211,7 @@ class DoubleBeamStudy:
         Normal modes in the reduced basis (plus one static mode per joint).
     hb : fe.harmonic_balance.HBSettings
     identify_weighting, identify_pseudo_modes
-        Options of :func:`cases.identify.identify_modes` (module docstring).
+        Options of :func:`ident.identify.identify_modes` (module docstring).
     weak_joint_scales : tuple of float
         Extra simulations with ``R`` times each factor (same chi): the estimator's
         recovery of chi when the joint softens less (:func:`weak_joint_recovery`).
@@ -280,7 +282,7 @@ class DoubleBeamStudy:
 
     @property
     def identify_options(self) -> dict:
-        """Options of :func:`cases.identify.identify_modes` (module docstring)."""
+        """Options of :func:`ident.identify.identify_modes` (module docstring)."""
         return {"weighting": self.identify_weighting, "pseudo_modes": self.identify_pseudo_modes}
 
 
@@ -337,7 +339,7 @@ class JointSetup:
         Modal damping ratio of every basis vector.
     fe_mode : int
         1-based FE mode of the measured mode; ``omega_n`` its frequency (rad/s).
-    source : cases.estimate.Estimate
+    source : inverse.estimate.Estimate
         The estimate chi and R come from (unless the study gives them).
     slip_level1_linear : (n_joints,) linear-inverse slip amplitudes at level 1 (m).
     """
@@ -380,7 +382,7 @@ def phi_max_of(K_T, R, chi, beta) -> float:
 def source_estimate(model, data: MeasuredData, study: DoubleBeamStudy, **options):
     """The :data:`SOURCE_METHOD` estimate of the ``study.fit`` levels of ``data`` with
     the FE ``model`` (paper eq. 33-37): the chi and R~ that drive the simulation.
-    ``options`` go to :func:`cases.estimate.estimate` (e.g. ``confidence``)."""
+    ``options`` go to :func:`inverse.estimate.estimate` (e.g. ``confidence``)."""
     return estimate(data, fit_levels=study.fit, method=SOURCE_METHOD, model=model,
                     force_scale=study.force_scale, **options)
 
@@ -411,7 +413,7 @@ def joint_setup(model, data: MeasuredData, study: DoubleBeamStudy, source=None) 
     params = [IwanParameters.from_density(R * w, chi, pm, K_T * w * beta / (1.0 + beta))
               for w in shares]
     F_S = float(sum(p.F_S for p in params))
-    # viscous damping: level 1 gets the measured zeta (eq. 2 of cases.estimate)
+    # viscous damping: level 1 gets the measured zeta (eq. 2 of inverse.estimate)
     fe_mode = src.case.fe_mode
     omega_n = 2 * math.pi * src.case.fe_frequency_hz
     dc1 = src.kappa1_B if study.chi is None and study.R is None else (
@@ -436,7 +438,7 @@ def ritz_basis(model, n_modes: int, zeta: float) -> ReducedModel:
 
     Parameters
     ----------
-    model : cases.double_beam.DoubleBeamModel
+    model : cases.double_beam.model.DoubleBeamModel
         ``K_without_joints``, ``M``, ``slip_matrix`` (``G``), ``joint_stiffness``.
     n_modes : int
     zeta : float
@@ -470,13 +472,13 @@ def nonlinear_model(model, setup: JointSetup, study: DoubleBeamStudy):
 def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy):
     """The stepped-sine campaign of the study: ``study.lines`` (Hz, upward) at the
     forces ``setup.force`` (N) on the drive DOF, every DOF recorded, harmonic balance
-    with ``study.hb`` (:class:`fe.stepped_sine.HBProtocol`).
+    with ``study.hb`` (:class:`runs.stepped_sine.HBProtocol`).
 
     Returns
     -------
-    fe.stepped_sine.Campaign
+    runs.stepped_sine.Campaign
     """
-    from fe.stepped_sine import Campaign, HBProtocol
+    from runs.stepped_sine import Campaign, HBProtocol
 
     n = model.M.shape[0]
     load = np.zeros(n)
@@ -486,7 +488,7 @@ def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy):
 
 def mode_weights(model, setup: JointSetup):
     """The FE mode ``phi`` (mass-normalized, kg^-1/2) of ``setup.fe_mode`` and the B
-    weights ``q_m = w_m (g_m . phi)^2`` of its joints (eq. 1 of :mod:`cases.estimate`).
+    weights ``q_m = w_m (g_m . phi)^2`` of its joints (eq. 1 of :mod:`inverse.estimate`).
 
     Returns
     -------
@@ -536,10 +538,10 @@ def identify_levels(freq_hz, receptance, slip_amplitude, force, band, target_hz,
     target_hz : float
     weights : (n_joints,) ``q_m = w_m (g_m . phi)^2`` for the effective amplitude.
     options : dict, optional
-        Keyword options of :func:`cases.identify.identify_modes`.
+        Keyword options of :func:`ident.identify.identify_modes`.
     progress : tqdm bar or None (one tick per level).
     """
-    from cases.identify import identify_modes
+    from ident.identify import identify_modes
 
     f = np.asarray(freq_hz, dtype=float)
     sel = (f >= band[0]) & (f <= band[1])
@@ -721,7 +723,7 @@ class DoubleBeamReport:
     setup: JointSetup
     measured: MeasuredData
     simulated: MeasuredData
-    campaign: object            # fe.stepped_sine.CampaignResult
+    campaign: object            # runs.stepped_sine.CampaignResult
     identification: LevelIdentification
     modal_filter: ModalFilterLevels
     estimates_measured: dict    # method -> (Estimate, B_sim, R_sim) or error text
@@ -971,15 +973,15 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     study : DoubleBeamStudy
     store : path, optional
         Parent directory of the resumable campaign store ``campaign-hb-<hash12>``
-        (:func:`fe.stepped_sine.run_campaign`): finished levels are loaded, not recomputed.
+        (:func:`runs.stepped_sine.run_campaign`): finished levels are loaded, not recomputed.
     progress : bool
         tqdm bars on stderr.
     workers : int
         Without ``executor``: levels computed in that many local processes.
-    model : cases.double_beam.DoubleBeamModel, optional
-        Default: :func:`cases.double_beam.build_double_beam` (the shipped case).
-    executor : str or fe.executor.ExecutorSpec, optional
-        Where the levels run (:func:`fe.stepped_sine.run_campaign`); results are bitwise
+    model : cases.double_beam.model.DoubleBeamModel, optional
+        Default: :func:`cases.double_beam.model.build_double_beam` (the shipped case).
+    executor : str or runs.executor.ExecutorSpec, optional
+        Where the levels run (:func:`runs.stepped_sine.run_campaign`); results are bitwise
         the same. A local cluster or pool is started per campaign (one per weak-joint
         rerun as well).
 
@@ -987,8 +989,8 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
     -------
     DoubleBeamReport
     """
-    from cases.double_beam import build_double_beam
-    from fe.stepped_sine import campaign_hash, run_campaign
+    from cases.double_beam.model import build_double_beam
+    from runs.stepped_sine import campaign_hash, run_campaign
 
     timings = {}
     t0 = time.perf_counter()
@@ -1106,7 +1108,7 @@ def write_simulated_csv(rep: DoubleBeamReport, path) -> Path:
 def write_frf_files(rep: DoubleBeamReport, out) -> list[Path]:
     """The simulated receptance at the response DOF, one FRF CSV per level.
 
-    ``out/level_XX.csv`` (:func:`cases.frf_io.write_frf`, 17 significant digits) with
+    ``out/level_XX.csv`` (:func:`ident.frf_files.write_frf`, 17 significant digits) with
     ``# quantity = receptance`` (m/N), ``# excitation = <drive V>`` and one point
     ``acc1`` (Acc. 1, the response DOF), so that the simulated campaign goes through
     the same identification as measured FRFs::
@@ -1117,7 +1119,7 @@ def write_frf_files(rep: DoubleBeamReport, out) -> list[Path]:
     so its zeta agrees with ``simulated_measured.csv`` to about 1e-4 relative, not
     bitwise.)
     """
-    from cases.frf_io import FRFSet, write_frf
+    from ident.frf_files import FRFSet, write_frf
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -1454,8 +1456,8 @@ def write_report(rep: DoubleBeamReport, out, t_start: float | None = None) -> li
     """
     import json
 
-    from cases.commands.estimate import plot_estimate
-    from cases.jsonio import to_jsonable
+    from cli.commands.estimate import plot_estimate
+    from runs.jsonio import to_jsonable
     from viz.double_beam_plots import plot_joint_levels, plot_level_comparison
     from viz.frf_plots import plot_frf_levels
 

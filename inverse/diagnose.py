@@ -67,7 +67,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, special
 
-from cases.measured import MeasuredData
+from ident.measured import MeasuredData
 
 __all__ = [
     "CAUSES",

@@ -5,7 +5,7 @@ the fit levels (``iwanfe estimate``: paper eq. 33-37), simulates each sample wit
 nonlinear FE double beam through every level (harmonic-balance stepped sine, modal
 filter), and prints per level the measured value, the nominal FE prediction, the sample
 median and central interval, and the estimator's closed-form (delta-method) interval
-(:mod:`cases.uncertainty`). Every finished sample is stored under ``--out``; a rerun
+(:mod:`cases.double_beam.uncertainty`). Every finished sample is stored under ``--out``; a rerun
 computes only the missing ones.
 """
 from __future__ import annotations
@@ -16,15 +16,15 @@ import sys
 import time
 from pathlib import Path
 
-from cases.executor_cli import add_executor_arguments, executor_from_args, int_at_least
-from cases.jsonio import print_json
+from cli.executor_options import add_executor_arguments, executor_from_args, int_at_least
+from runs.jsonio import print_json
 
 NAME = "uncertainty"
 CASES = ("double-beam",)
 
 
 def register(subparsers) -> None:
-    from cases.uncertainty import DEFAULT_CONFIDENCE, DEFAULT_SAMPLES, DEFAULT_SEED, DISTRIBUTIONS
+    from cases.double_beam.uncertainty import DEFAULT_CONFIDENCE, DEFAULT_SAMPLES, DEFAULT_SEED, DISTRIBUTIONS
 
     parser = subparsers.add_parser(
         NAME,
@@ -68,7 +68,7 @@ def register(subparsers) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     sim = parser.add_argument_group("per-sample simulation (defaults: module docstring of "
-                                    "cases.uncertainty)")
+                                    "cases.double_beam.uncertainty)")
     sim.add_argument("--band", type=float, nargs=2, default=None, metavar=("LO", "HI"),
                      help="stepped-sine lines and band, Hz (default 236 268)")
     sim.add_argument("--df", type=float, default=None, metavar="HZ",
@@ -82,7 +82,7 @@ def register(subparsers) -> None:
 def _settings(args):
     import dataclasses
 
-    from cases.uncertainty import SAMPLE_STUDY, UncertaintySettings
+    from cases.double_beam.uncertainty import SAMPLE_STUDY, UncertaintySettings
 
     kw = {}
     if args.file is not None:
@@ -113,7 +113,7 @@ def _f(x, spec):
 
 
 def text_report(rep, source: str, files, wall: float) -> str:
-    """The readable report of an :class:`~cases.uncertainty.UncertaintyReport`."""
+    """The readable report of an :class:`~cases.double_beam.uncertainty.UncertaintyReport`."""
     st, src, dist = rep.settings, rep.source, rep.distribution
     c = st.confidence
     lo, hi = (100 * q for q in st.quantiles)
@@ -173,7 +173,7 @@ def write_outputs(rep, out: Path) -> list[Path]:
 
     import numpy as np
 
-    from cases.jsonio import to_jsonable
+    from runs.jsonio import to_jsonable
     from viz.uncertainty_plot import plot_uncertainty_bands
 
     out.mkdir(parents=True, exist_ok=True)
@@ -211,8 +211,8 @@ def write_outputs(rep, out: Path) -> list[Path]:
 
 
 def run(args) -> int:
-    from cases.double_beam_reproduction import DEFAULT_DATA
-    from cases.uncertainty import run_uncertainty
+    from cases.double_beam.study import DEFAULT_DATA
+    from cases.double_beam.uncertainty import run_uncertainty
 
     t0 = time.perf_counter()
     settings = _settings(args)

@@ -1,7 +1,7 @@
 """``iwanfe identify``: natural frequencies, damping ratios and shapes from FRF files.
 
 Each FILE holds one FRF set (one reference, one or more response points) as CSV or
-UFF 58 (:mod:`cases.frf_io`). Several FILEs are several excitation levels: the
+UFF 58 (:mod:`ident.frf_files`). Several FILEs are several excitation levels: the
 excitation of each comes from ``--excitation`` (one value per file, in file order) or
 from the file (CSV line ``# excitation = V``; UFF ID line ``excitation=V``). Levels are
 numbered by increasing excitation, the file order is the run order, and modes are
@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.frf_io import read_frf
-from cases.identify import QUANTITIES, identify, mac, modal_data_from_levels
-from cases.jsonio import print_json
+from ident.frf_files import read_frf
+from ident.identify import QUANTITIES, identify, mac, modal_data_from_levels
+from runs.jsonio import print_json
 
 NAME = "identify"
 
@@ -30,7 +30,7 @@ def register(subparsers) -> None:
         description=(
             "Identify the modes of FRF sets (one reference, one or more response points) "
             "by LSCF with automatic selection of the stable poles and residual-corrected "
-            "refinement (cases.identify). One FILE per excitation level; with several "
+            "refinement (ident.identify). One FILE per excitation level; with several "
             "FILEs the modes are followed across levels and --out writes the "
             "measured-data CSV for `iwanfe estimate`. CSV: freq_hz, re_<point>, "
             "im_<point> columns and optional '# quantity = ...', '# excitation = ...' "
@@ -126,7 +126,7 @@ def run(args) -> int:
         table = modal_data_from_levels(excitation, [r.modes for _, _, r in results],
                                        sources=[Path(f).name for f in files])
         if args.out:
-            from cases.measured import write_measured
+            from ident.measured import write_measured
             write_measured(args.out, table)
             short = [int(m) for m in table.modes if np.sum(table.mode == m) < 4]
             if short:

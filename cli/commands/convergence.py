@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.executor_cli import add_executor_arguments, executor_from_args
-from cases.jsonio import print_json, to_jsonable
+from cli.executor_options import add_executor_arguments, executor_from_args
+from runs.jsonio import print_json, to_jsonable
 
 
 def register(subparsers) -> None:

@@ -1,7 +1,7 @@
 """The ``iwanfe`` command: parses, calls, prints.
 
 Every sub-command lives in ``cases/commands/<name>.py``. Bad input (``ValueError``,
-including :class:`cases.errors.InputError`, or an unreadable file) is reported as one
+including :class:`ident.errors.InputError`, or an unreadable file) is reported as one
 line on stderr with exit status 2, never as a traceback.
 """
 from __future__ import annotations
@@ -51,9 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMANDS:
         try:
-            module = importlib.import_module(f"cases.commands.{name}")
+            module = importlib.import_module(f"cli.commands.{name}")
         except ModuleNotFoundError as exc:  # command not built yet
-            if exc.name == f"cases.commands.{name}":
+            if exc.name == f"cli.commands.{name}":
                 continue
             raise
         module.register(sub)

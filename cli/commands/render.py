@@ -16,7 +16,7 @@ CASES = ("double-beam",)
 def build_case_model(case: str):
     """The FE model of a case that has strip geometry (for render and export)."""
     if case == "double-beam":
-        from cases.double_beam import DoubleBeamConfig, build_double_beam
+        from cases.double_beam.model import DoubleBeamConfig, build_double_beam
 
         return build_double_beam(DoubleBeamConfig())
     raise ValueError(f"unknown case '{case}': choose from {', '.join(CASES)}")

@@ -79,7 +79,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy import optimize, stats
 
-from cases.errors import InputError
+from ident.errors import InputError
 from joints.iwan import kappa1, kappa2_exact, kappa2_paper
 
 METHODS = ("paper", "exact", "amplitude")
@@ -505,7 +505,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, case=None,
 
     Parameters
     ----------
-    data : cases.measured.MeasuredData
+    data : ident.measured.MeasuredData
     fit_levels : sequence of int or str, optional
         Levels used in the fit (``"1-7"``); default all levels of the mode. Successive
         fit levels give the differences (levels 1-7 -> v = 1..6).
@@ -778,7 +778,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, case=None,
 def build_case(name: str):
     """The FE model of a named case (``double-beam``)."""
     if name == "double-beam":
-        from cases.double_beam import build_double_beam
+        from cases.double_beam.model import build_double_beam
         return build_double_beam()
     raise InputError(f"unknown case {name!r} (choose {', '.join(CASES)})")
 

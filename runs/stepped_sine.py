@@ -24,7 +24,7 @@ protocols:
   squares (paper section 3, Table 1: half peak-to-peak in the last second).
 
 Each level starts from rest with virgin joints, so levels are independent tasks of
-:func:`fe.executor.run_sweep` (serial, local processes or a dask.distributed cluster,
+:func:`runs.executor.run_sweep` (serial, local processes or a dask.distributed cluster,
 bitwise the same numbers). Each finished level is written to ``level_XX.npz`` in the
 store directory as soon as it is done, with a ``manifest.json`` holding the SHA-256
 hash of every input (model, joints, lines, levels, protocol); a rerun with the same
@@ -47,8 +47,8 @@ from typing import Callable
 import numpy as np
 
 from fe.harmonic_balance import HBSettings, continuation
-from fe.executor import ExecutorSpec, run_sweep
-from fe.store import open_manifest, write_manifest
+from runs.executor import ExecutorSpec, run_sweep
+from runs.store import open_manifest, write_manifest
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
 
@@ -341,7 +341,7 @@ def _level_task(level: int, shared) -> LevelResult:
 
 
 def _executor_spec(executor, workers) -> ExecutorSpec:
-    """The :class:`~fe.executor.ExecutorSpec` of :func:`run_campaign`'s arguments."""
+    """The :class:`~runs.executor.ExecutorSpec` of :func:`run_campaign`'s arguments."""
     if workers is not None and (isinstance(workers, bool) or int(workers) != workers
                                 or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
@@ -367,7 +367,7 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
                  executor: str | ExecutorSpec | None = None) -> CampaignResult:
     """Run (or resume) a campaign.
 
-    Levels are independent tasks of :func:`fe.executor.run_sweep`: computed serially,
+    Levels are independent tasks of :func:`runs.executor.run_sweep`: computed serially,
     in local processes or on a dask.distributed cluster, with bitwise the same results
     (each level starts from rest; no random numbers).
 
@@ -389,8 +389,8 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
     on_level : callable, optional
         Called as ``on_level(level, result)`` after each newly computed level has been
         stored (an exception raised there interrupts the campaign after the save).
-    executor : {"serial", "processes", "dask"} or fe.executor.ExecutorSpec, optional
-        Where the levels run; an :class:`~fe.executor.ExecutorSpec` can name an
+    executor : {"serial", "processes", "dask"} or runs.executor.ExecutorSpec, optional
+        Where the levels run; an :class:`~runs.executor.ExecutorSpec` can name an
         existing dask scheduler (``ExecutorSpec("dask", scheduler="tcp://HOST:8786")``).
 
     Returns

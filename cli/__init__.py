@@ -1,0 +1,1 @@
+"""The ``iwanfe`` command: parse, call, print. No physics lives here."""
