@@ -60,7 +60,8 @@ from cases.double_beam.model import build_double_beam  # noqa: E402
 from fe.newmark import NewmarkIntegrator, NewmarkSettings  # noqa: E402
 from fe.reduction import (JointBank, JointedSystem, full_model, rayleigh_damping,  # noqa: E402
                           reduced_basis)
-from runs.stepped_sine import Campaign, HBProtocol, NewmarkProtocol, run_campaign  # noqa: E402
+from runs.campaign import Campaign, HBProtocol, NewmarkProtocol  # noqa: E402
+from runs.stepped_sine import run_campaign  # noqa: E402
 from joints.iwan import IwanParameters  # noqa: E402
 
 CHI = -0.4

@@ -1,4 +1,4 @@
-"""Jenkins-bank slider updates per second: the compiled kernel of joints/jenkins.py
+"""Jenkins-bank slider updates per second: the compiled kernel of joints/kernel.py
 against straightforward vectorized numpy updates, measured side by side in one run.
 
 Usage::
@@ -42,12 +42,8 @@ import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
 from joints.iwan import IwanParameters  # noqa: E402
-from joints.jenkins import (  # noqa: E402
-    bank_update_kernel,
-    discretize,
-    jenkins_update,
-    jenkins_update_into,
-)
+from joints.jenkins import discretize, jenkins_update, jenkins_update_into  # noqa: E402
+from joints.kernel import bank_update_kernel  # noqa: E402
 
 TARGET_RATE = 5e8          # slider updates per second, one core
 TARGET_RATIO = 20.0        # kernel / straightforward numpy
@@ -85,8 +81,8 @@ def previous_numpy_update(slip, anchor, k, phi):
 @njit
 def compiled_march(slips, anchor, k, phi, force, tangent):
     """Step loop calling the kernel from compiled code, committing in place, on
-    preallocated slip/force/tangent vectors as the solvers do (fe/newmark.py): a row
-    view ``slips[t]`` made per call would cost ~30 ns, more than a 100-slider joint."""
+    preallocated slip/force/tangent vectors as the solvers do (fe/newmark_march.py): a
+    row view ``slips[t]`` made per call would cost ~30 ns, more than a 100-slider joint."""
     n_joints = slips.shape[1]
     s = np.empty(n_joints)
     f = np.empty(n_joints)

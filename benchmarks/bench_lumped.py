@@ -29,8 +29,8 @@ import numpy as np
 
 from ident.identify import identify_modes
 from cases.lumped10.model import MODE_BANDS, LumpedStudy, lumped10_setup
-from runs.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
-                             run_campaign)
+from runs.campaign import Campaign, HBProtocol, NewmarkProtocol, PaperProtocol
+from runs.stepped_sine import run_campaign
 
 
 def main(argv=None) -> int:

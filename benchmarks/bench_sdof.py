@@ -13,12 +13,12 @@ viscous damping ``c = 2 (0.005) sqrt(K_T m)`` (0.5 % of critical, stuck), driven
     ``--lines`` lines over ``w_r (1 -+ min(3 zeta_eq, 0.5))`` with natural-parameter
     continuation. Truth per line: the exact first-harmonic solution of the continuous
     Iwan joint, a root of the scalar equation
-    ``|k_in(A) - m w^2 + i (k_q(A) + w c)| A = P`` (:func:`joints.iwan.describing_function`,
+    ``|k_in(A) - m w^2 + i (k_q(A) + w c)| A = P`` (:func:`joints.describing.describing_function`,
     Brent's method to 1e-15 relative; the root nearest the method's amplitude where
     the equation has several); error = ``max |X - X_true| / |X_true|`` over the lines
     (complex first-harmonic slip). Methods:
 
-    - ``exact DF``: :func:`fe.harmonic_balance.continuation_exact` (first harmonic,
+    - ``exact DF``: :func:`fe.hb_exact.continuation_exact` (first harmonic,
       continuous Iwan joint, analytic Jacobian);
     - ``bank H=1``: :func:`fe.harmonic_balance.continuation` on a bank of 100 Jenkins
       sliders, first harmonic, AFT with 64 or 256 samples: its error against the exact
@@ -33,7 +33,7 @@ viscous damping ``c = 2 (0.005) sqrt(K_T m)`` (0.5 % of critical, stuck), driven
     steps per period (frequency pre-warped, :mod:`runs.stepped_sine`):
 
     - ``compiled loop``: :class:`fe.newmark.NewmarkIntegrator` (``@njit`` loop on
-      :func:`joints.jenkins.bank_update_kernel`), 600 periods in one call;
+      :func:`joints.kernel.bank_update_kernel`), 600 periods in one call;
     - ``per period``: one ``run`` per period as the stepped-sine protocol calls it;
     - ``reference loop``: ``integrate(compiled=False)`` (Python loop over
       :func:`joints.jenkins.jenkins_update`);
@@ -66,10 +66,12 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
-from fe.harmonic_balance import HBSettings, continuation, continuation_exact, solve_hb  # noqa: E402
+from fe.harmonic_balance import HBSettings, continuation, solve_hb  # noqa: E402
+from fe.hb_exact import continuation_exact  # noqa: E402
 from fe.newmark import NewmarkIntegrator, NewmarkSettings  # noqa: E402
 from fe.reduction import JointBank, JointedSystem, reduced_basis  # noqa: E402
-from joints.iwan import IwanParameters, describing_function  # noqa: E402
+from joints.describing import describing_function  # noqa: E402
+from joints.iwan import IwanParameters  # noqa: E402
 
 JOINT = IwanParameters(chi=-0.5, K_T=1.1e5, F_S=400.0, beta=4.0)
 F_STUCK = 100.0        # Hz

@@ -246,7 +246,7 @@ def check_paper_tables() -> list[TableCheck]:
         All checks, passing or not; ``[c for c in checks if not c.ok]`` are the
         disagreements beyond printed rounding.
     """
-    from joints.iwan import kappa1
+    from joints.describing import kappa1
 
     t = paper_tables()
     t3, t4, t5, t6 = t["table3"], t["table4"], t["table5"], t["table6"]

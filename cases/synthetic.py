@@ -46,7 +46,8 @@ import numpy as np
 
 from ident.identify import identify_modes
 from ident.measured import MeasuredData
-from joints.iwan import IwanParameters, describing_function, kappa1, kappa2_exact
+from joints.describing import describing_function, kappa1, kappa2_exact
+from joints.iwan import IwanParameters
 
 __all__ = [
     "CAUSES",

@@ -80,7 +80,7 @@ import scipy.sparse.linalg as spla
 from scipy import optimize, stats
 
 from ident.errors import InputError
-from joints.iwan import kappa1, kappa2_exact, kappa2_paper
+from joints.describing import kappa1, kappa2_exact, kappa2_paper
 
 METHODS = ("paper", "exact", "amplitude")
 CASES = ("double-beam",)

@@ -21,11 +21,12 @@ of sliders that slip at that amplitude, c = 0.5 (chi = -0.2) to 1.2 (chi = -0.5)
 (measured, A from 0.01 to 0.3 phi_max): 1e-3 needs m_A of about 35.
 
 State update: :func:`jenkins_update` (pure) and :func:`jenkins_update_into` (in place)
-run the compiled kernel :func:`bank_update_kernel`, which compiled solvers may call
-from their own ``@njit`` step loops: blocks of 8 sliders as explicit 8-lane vector IR,
-summed in a fixed order (comment above ``LANES``), so the numbers do not depend on how
-or where the kernel was compiled. Anchors are numpy's bit for bit; force and tangent
-sums agree with numpy's to rounding. Throughput and cost model: ``benchmarks/README.md``
+check and convert their arguments and run the compiled kernel
+:func:`joints.kernel.bank_update_kernel`, which compiled solvers call from their own
+``@njit`` step loops: blocks of 8 sliders as explicit 8-lane vector IR, summed in a
+fixed order (:mod:`joints.kernel_reference`), so the numbers do not depend on how or
+where the kernel was compiled. Anchors are numpy's bit for bit; force and tangent sums
+agree with numpy's to rounding. Throughput and cost model: ``benchmarks/README.md``
 (``bench_jenkins.py``).
 """
 from __future__ import annotations
@@ -35,9 +36,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from joints.iwan import IwanParameters
+from joints.kernel import bank_update_kernel
 
 __all__ = ["JenkinsDiscretization", "discretize", "discretize_log", "jenkins_update",
-           "jenkins_update_into", "bank_update_kernel"]
+           "jenkins_update_into"]
 
 
 @dataclass(frozen=True)
@@ -117,10 +119,10 @@ def discretize_log(p: IwanParameters, a_low: float,
     shifted.
 
     Accuracy (closed-form describing function of each slider against
-    :func:`joints.iwan.dissipation_per_cycle` and :func:`joints.iwan.describing_function`,
-    amplitudes ``A`` from 1e-3 ``phi_max`` to ``phi_max`` with ``a_low = 2**-6 1e-3
-    phi_max``, chi from -0.9 to -0.1, beta = 0 and 4; ``tests/test_jenkins.py``): the
-    largest relative error of the dissipation per cycle and of the in-phase stiffness
+    :func:`joints.iwan.dissipation_per_cycle` and
+    :func:`joints.describing.describing_function`, amplitudes ``A`` from 1e-3
+    ``phi_max`` to ``phi_max`` with ``a_low = 2**-6 1e-3 phi_max``, chi from -0.9 to
+    -0.1, beta = 0 and 4; ``tests/test_jenkins.py``): the largest relative error of the dissipation per cycle and of the in-phase stiffness
     loss ``K_T - k_in`` is 3.9e-3 / 7.4e-4 with 8 sliders per octave, 9.9e-4 / 1.7e-4
     with 16 (6.3e-4 / 7.4e-5 at chi = -0.5; 257 sliders) and 2.4e-4 / 8.1e-5 with 32:
     second order in the cell width for chi >= -0.5, larger for chi near 0 (near chi =
@@ -164,36 +166,11 @@ def discretize_log(p: IwanParameters, a_low: float,
 
 
 # ------------------------------------------------------------------ state update
-#
-# For each joint j and slider i (paper eq. 2 over one step, a return mapping)::
-#
-#     x_new     = clamp(x, s - phi, s + phi)      (x if s - phi < x < s + phi)
-#     force_j   = sum_i (s - x_new) k
-#     tangent_j = sum_i (k if x_new == x else 0)
-#
-# The compiled kernel runs each joint's sliders in blocks of 8 as explicit 8-lane vector
-# IR (one AVX-512 register, two AVX2 ones): two interleaved accumulators (lane m of
-# accumulator u adds the terms 16 b + 8 u + m, b = 0, 1, ...; a last odd block goes to
-# accumulator 0), then accumulator 0 + accumulator 1 lane by lane, the 8 lanes summed as
-# ((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)); plus, when n mod 8 >= 4, the next
-# 4 sliders as a 4-lane block summed (l0 + l1) + (l2 + l3); plus the n mod 4 last
-# sliders summed in order. No fast-math flags: that order is fixed by the IR, so every
-# compilation (fresh or from numba's cache, any SIMD width, any machine) gives the same
-# bits, which is what makes sweeps bitwise identical on every executor. The sums differ
-# from numpy's pairwise ``np.sum`` in the last bits (within (n - 1) eps sum|terms|,
-# Higham 2002 eq. 4.6; tests, and tests replay the order above in numpy bit for bit);
-# the anchors involve no sum and are numpy's bit for bit (but for the sign of a zero
-# anchor on an exact tie). Non-finite input: a NaN anchor stays NaN; an infinite slip
-# gives NaN force as in numpy; a NaN slip (or limit) gives NaN force but, unlike numpy,
-# leaves the anchors where they were (and counts them stuck).
-
-LANES = 8       # lanes of the vector IR
-INTERLEAVE = 2  # independent vector accumulators
 
 
 def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
-    """Reference numpy implementation of :func:`jenkins_update` (any broadcastable
-    shapes); returns ``(force, tangent, anchor_new)``."""
+    """The update in numpy for any broadcastable shapes (sums in numpy's pairwise
+    order), used outside the kernel's shapes; returns ``(force, tangent, anchor_new)``."""
     col = slip[..., None]
     anchor_new = np.maximum(anchor, col - slip_limit)
     np.minimum(anchor_new, col + slip_limit, out=anchor_new)
@@ -201,206 +178,6 @@ def _jenkins_update_numpy(slip, anchor, stiffness, slip_limit):
     force = np.sum((col - anchor_new) * stiffness, axis=-1)
     tangent = np.sum(np.where(stuck, stiffness, 0.0), axis=-1)
     return force, tangent, anchor_new
-
-
-try:  # the compiled kernel; numpy fallback if numba is missing
-    from llvmlite import ir as _ir
-    from numba import njit, types as _nbtypes
-    from numba.core.cpu import CPUTargetOptions
-    from numba.extending import intrinsic as _intrinsic
-except ImportError:  # pragma: no cover - numba is a declared dependency
-    njit = None
-
-# Compile the kernel without reference counting where numba offers the (private) switch.
-_NO_REFCOUNT = {"_nrt": False} if njit is not None and hasattr(CPUTargetOptions, "_nrt") else {}
-
-if njit is not None:
-
-    @_intrinsic
-    def _simd_blocks(typingctx, s, x, phi, k, ix, ip, ik, n):
-        """Return mapping of the ``n // 8`` full blocks of 8 sliders of one joint and of
-        the next 4 when ``n mod 8 >= 4``, in place on ``x`` (flat C-contiguous arrays:
-        anchors ``x[ix + i]``, limits ``phi[ip + i]``, stiffnesses ``k[ik + i]``);
-        returns their (force, tangent) summed in the order of the comment above."""
-        ok = all(isinstance(a, _nbtypes.Array) and a.dtype == _nbtypes.float64
-                 and a.layout == "C" for a in (x, phi, k))
-        if not ok or s != _nbtypes.float64 or not x.mutable:
-            return None
-        intp = _nbtypes.intp
-        sig = _nbtypes.UniTuple(_nbtypes.float64, 2)(s, x, phi, k, intp, intp, intp, intp)
-
-        def codegen(context, builder, signature, args):
-            s_v, _, _, _, ix_v, ip_v, ik_v, n_v = args
-            vty = _ir.VectorType(_ir.DoubleType(), LANES)
-            i32 = _ir.IntType(32)
-            ity = ix_v.type
-            px, pphi, pk = (context.make_array(t)(context, builder, v).data
-                            for t, v in zip(signature.args[1:4], args[1:4]))
-
-            def splat(value, width):
-                v = _ir.Constant(_ir.VectorType(value.type, width), _ir.Undefined)
-                for m in range(width):
-                    v = builder.insert_element(v, value, _ir.Constant(i32, m))
-                return v
-
-            sv = sv_full = splat(s_v, LANES)
-            zero = _ir.Constant(vty, [0.0] * LANES)
-
-            def block(i, f_acc, t_acc, width=LANES):
-                """Sliders i .. i+width-1: clamp, store, accumulate; new accumulators."""
-                vty = _ir.VectorType(_ir.DoubleType(), width)
-                sv = splat(s_v, width) if width != LANES else sv_full
-                zero = _ir.Constant(vty, [0.0] * width)
-
-                def at(ptr, base):
-                    return builder.bitcast(builder.gep(ptr, [builder.add(base, i)]),
-                                           vty.as_pointer())
-                xv = builder.load(at(px, ix_v), align=8)
-                pv = builder.load(at(pphi, ip_v), align=8)
-                kv = builder.load(at(pk, ik_v), align=8)
-                lo = builder.fsub(sv, pv)
-                hi = builder.fadd(sv, pv)
-                # x86 max/min operand order: NaN anchors stay NaN, a NaN bound keeps x
-                y = builder.select(builder.fcmp_ordered(">", lo, xv), lo, xv)
-                y = builder.select(builder.fcmp_ordered("<", hi, y), hi, y)
-                builder.store(y, at(px, ix_v), align=8)
-                f_term = builder.fmul(builder.fsub(sv, y), kv)
-                t_term = builder.select(builder.fcmp_ordered("==", y, xv), kv, zero)
-                return builder.fadd(f_acc, f_term), builder.fadd(t_acc, t_term)
-
-            def loop(name, start, limit, accs):
-                """Blocks from slider ``start`` while ``len(accs)`` more fit below
-                ``limit``, block u of each step into accumulator u."""
-                entry = builder.basic_block
-                head = builder.append_basic_block(name + ".head")
-                body = builder.append_basic_block(name + ".body")
-                done = builder.append_basic_block(name + ".done")
-                builder.branch(head)
-                builder.position_at_end(head)
-                i = builder.phi(ity)
-                i.add_incoming(start, entry)
-                phis = []
-                for f, t in accs:
-                    pf, pt = builder.phi(vty), builder.phi(vty)
-                    pf.add_incoming(f, entry)
-                    pt.add_incoming(t, entry)
-                    phis.append((pf, pt))
-                nxt = builder.add(i, _ir.Constant(ity, LANES * len(accs)))
-                builder.cbranch(builder.icmp_signed("<=", nxt, limit), body, done)
-                builder.position_at_end(body)
-                new = [block(builder.add(i, _ir.Constant(ity, LANES * u)), pf, pt)
-                       for u, (pf, pt) in enumerate(phis)]
-                latch = builder.basic_block
-                builder.branch(head)
-                i.add_incoming(nxt, latch)
-                for (pf, pt), (f, t) in zip(phis, new):
-                    pf.add_incoming(f, latch)
-                    pt.add_incoming(t, latch)
-                builder.position_at_end(done)
-                return i, phis
-
-            limit = builder.mul(builder.sdiv(n_v, _ir.Constant(ity, LANES)),
-                                _ir.Constant(ity, LANES))
-            i_end, accs = loop("pairs", _ir.Constant(ity, 0), limit,
-                               [(zero, zero)] * INTERLEAVE)
-            _, (last,) = loop("single", i_end, limit, [accs[0]])
-            accs = [last] + accs[1:]
-
-            def lane_tree(v):
-                """((l0 + l1) + (l2 + l3)) + ((l4 + l5) + (l6 + l7)) by shuffles: after
-                step h, lane 2h m holds the sum of lanes 2h m .. 2h m + 2h - 1."""
-                width = v.type.count
-                h = 1
-                while h < width:
-                    partner = [m ^ h for m in range(width)]
-                    v = builder.fadd(v, builder.shuffle_vector(
-                        v, v, _ir.Constant(_ir.VectorType(i32, width), partner)))
-                    h *= 2
-                return builder.extract_element(v, _ir.Constant(i32, 0))
-
-            sums = []
-            for which in (0, 1):
-                v = accs[0][which]
-                for a in accs[1:]:
-                    v = builder.fadd(v, a[which])
-                sums.append(lane_tree(v))
-            # a half block of 4 when n mod 8 >= 4, its own lane tree added after
-            half = LANES // 2
-            rem = builder.srem(n_v, _ir.Constant(ity, LANES))
-            before = builder.basic_block
-            with builder.if_then(builder.icmp_signed(">=", rem, _ir.Constant(ity, half))):
-                zero4 = _ir.Constant(_ir.VectorType(_ir.DoubleType(), half), [0.0] * half)
-                halves = [lane_tree(v) for v in block(limit, zero4, zero4, half)]
-                inside = builder.basic_block
-            phis = [builder.phi(_ir.DoubleType()) for _ in (0, 1)]
-            for ph, h in zip(phis, halves):
-                ph.add_incoming(_ir.Constant(_ir.DoubleType(), 0.0), before)
-                ph.add_incoming(h, inside)
-            sums = [builder.fadd(v, ph) for v, ph in zip(sums, phis)]
-            return context.make_tuple(builder, signature.return_type, sums)
-
-        return sig, codegen
-
-    @njit(cache=True, inline="always")
-    def _row_in_place(s, x, j, k, rk, phi, rp):
-        """Return mapping of joint ``j``'s sliders, committed into ``x[j]``; returns
-        (force, tangent): the blocks of 8 and 4 by :func:`_simd_blocks`, the n mod 4
-        last sliders in order (independently, then added)."""
-        n = x.shape[1]
-        f_tail = 0.0
-        t_tail = 0.0
-        for i in range(n - n % (LANES // 2), n):
-            xi = x[j, i]
-            p = phi[rp, i]
-            lo = s - p
-            hi = s + p
-            y = lo if lo > xi else xi
-            y = hi if hi < y else y
-            x[j, i] = y
-            f_tail += (s - y) * k[rk, i]
-            t_tail += k[rk, i] if y == xi else 0.0
-        f, t = _simd_blocks(s, x, phi, k, j * n, rp * n, rk * n, n)
-        return f + f_tail, t + t_tail
-
-    @njit(cache=True, **_NO_REFCOUNT)
-    def bank_update_kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
-        """Compiled Jenkins-bank return mapping (the kernel of :func:`jenkins_update`).
-
-        Callable from other ``@njit`` code (solvers' step loops; pass preallocated
-        arrays, not slices made per call: a view costs more than a small bank).
-        Single-threaded, no heap allocation, compiled without reference counting
-        (``_nrt=False``: the array arguments' incref/decref around the copy branch
-        cost ~75 ns per call, more than a 300-slider joint).
-
-        Parameters
-        ----------
-        slip : float64[n_joints]
-            Joint slips (m).
-        anchor : float64[n_joints, n_sliders], C-contiguous
-            Committed slider positions (m); only read (unless it is ``out_anchor``).
-        stiffness, slip_limit : float64[n_rows, n_sliders], C-contiguous
-            ``k_i`` (N/m) and ``phi_i`` (m); ``n_rows`` is 1 (shared by all joints) or
-            ``n_joints``.
-        out_anchor : float64[n_joints, n_sliders], C-contiguous
-            Receives the trial slider positions (m); may be ``anchor`` itself (commit
-            in place). Other overlaps are not allowed.
-        force, tangent : float64[n_joints]
-            Receive the joint force (N) and tangent stiffness (N/m).
-        """
-        k_step = 1 if stiffness.shape[0] != 1 else 0
-        phi_step = 1 if slip_limit.shape[0] != 1 else 0
-        if anchor.ctypes.data != out_anchor.ctypes.data:
-            for j in range(anchor.shape[0]):
-                for i in range(anchor.shape[1]):
-                    out_anchor[j, i] = anchor[j, i]
-        for j in range(anchor.shape[0]):
-            f, t = _row_in_place(slip[j], out_anchor, j, stiffness, j * k_step,
-                                 slip_limit, j * phi_step)
-            force[j] = f
-            tangent[j] = t
-
-else:  # pragma: no cover
-    bank_update_kernel = None
 
 
 def _as_float(a):
@@ -411,7 +188,7 @@ def _kernel_operands(slip, anchor, stiffness, slip_limit):
     """(stiffness, slip_limit) as 2-D (1 or n_joints, n_sliders) views for
     :func:`bank_update_kernel`, or None when the shapes are not the contract's (the
     numpy path then broadcasts). All inputs are float64 C-contiguous already."""
-    if bank_update_kernel is None or anchor.ndim != 2 or slip.ndim != 1:
+    if anchor.ndim != 2 or slip.ndim != 1:
         return None
     n_joints, n_sliders = anchor.shape
     if slip.shape[0] != n_joints:

@@ -1,35 +1,14 @@
-"""Stepped-sine campaigns: force levels x frequency lines, resumable on disk.
+"""Stepped-sine campaigns run level by level, resumable on disk.
 
-At each line the structure is driven by ``f(t) = F cos(theta(t)) * load`` and the
-first harmonic of the periodic response is recorded (receptance ``X_1 / F`` at the
-output DOFs, joint-slip harmonics and half peak-to-peak slip amplitudes). Three
-protocols:
-
-* :class:`HBProtocol` (default, fast): harmonic balance (:mod:`fe.harmonic_balance`)
-  with natural-parameter continuation from line to line (the previous lines'
-  solutions predict the next one, as the structure's state does in a sweep).
-* :class:`NewmarkProtocol`: time integration (:mod:`fe.newmark`) with the state and
-  the excitation phase carried from line to line like a real stepped-sine test; a
-  line is finished when the response is periodic: the change ``d_p`` of the
-  first-harmonic vector between successive periods, extrapolated geometrically
-  (``d_p rho/(1 - rho)`` with ``rho`` the largest of the last three ratios
-  ``d_p/d_{p-1}``: a bound on the remaining drift of a decaying transient), falls
-  below ``tol`` relative to the response. Optional frequency pre-warping removes the
-  trapezoidal rule's frequency error: with ``n`` steps per period the discrete
-  system driven at ``w'`` responds like the continuous one at
-  ``(2/dt) tan(w' dt/2)``, so driving at ``w' = w pi/(n tan(pi/n))`` yields the
-  response at ``w`` exactly (the Jenkins banks are rate independent).
-* :class:`PaperProtocol`: the paper's fixed duration per line, every line from rest:
-  9 s of settling then a 1-s window in which the first harmonic is obtained by least
-  squares (paper section 3, Table 1: half peak-to-peak in the last second).
-
-Each level starts from rest with virgin joints, so levels are independent tasks of
-:func:`runs.executor.run_sweep` (serial, local processes or a dask.distributed cluster,
-bitwise the same numbers). Each finished level is written to ``level_XX.npz`` in the
-store directory as soon as it is done, with a ``manifest.json`` holding the SHA-256
-hash of every input (model, joints, lines, levels, protocol); a rerun with the same
-inputs loads the finished levels and computes only the missing ones, giving the same
-numbers as an uninterrupted run.
+The protocols and the campaign definition are in :mod:`runs.campaign`; here each
+protocol's level runner (:func:`run_level`), the campaign hash and
+:func:`run_campaign`. Each level starts from rest with virgin joints, so levels are
+independent tasks of :func:`runs.executor.run_sweep` (serial, local processes or a
+dask.distributed cluster, bitwise the same numbers). Each finished level is written to
+``level_XX.npz`` in the store directory as soon as it is done, with a
+``manifest.json`` holding the SHA-256 hash of every input (model, joints, lines,
+levels, protocol); a rerun with the same inputs loads the finished levels and computes
+only the missing ones, giving the same numbers as an uninterrupted run.
 
 SI units: Hz for line frequencies, N for force amplitudes, m for displacements.
 """
@@ -40,146 +19,21 @@ import hashlib
 import json
 import os
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from fe.harmonic_balance import HBSettings, continuation
-from runs.executor import ExecutorSpec, run_sweep
-from runs.store import open_manifest, write_manifest
+from fe.harmonic_balance import continuation
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
+from runs.campaign import Campaign, CampaignResult, LevelResult, NewmarkProtocol, PaperProtocol
+from runs.executor import ExecutorSpec, run_sweep
+from runs.store import open_manifest, write_manifest
 
-__all__ = [
-    "HBProtocol",
-    "NewmarkProtocol",
-    "PaperProtocol",
-    "Campaign",
-    "LevelResult",
-    "CampaignResult",
-    "campaign_hash",
-    "run_level",
-    "run_campaign",
-]
+__all__ = ["campaign_hash", "run_level", "run_campaign"]
 
 FORMAT = "iwanfe-stepped-sine/1"
-
-
-@dataclass(frozen=True)
-class HBProtocol:
-    """Harmonic balance with continuation over the lines."""
-
-    settings: HBSettings = field(default_factory=HBSettings)
-    name: str = "hb"
-
-
-@dataclass(frozen=True)
-class NewmarkProtocol:
-    """Time integration until periodic (see module docstring).
-
-    ``steps_per_period`` time steps per excitation period; ``tol`` relative bound on
-    the remaining drift of the first harmonic; ``min_periods``/``max_periods`` per line
-    (``max_periods`` reached raises); HHT ``alpha``; ``prewarp`` the frequency
-    correction of the trapezoidal rule.
-    """
-
-    steps_per_period: int = 256
-    tol: float = 1e-6
-    min_periods: int = 4
-    max_periods: int = 5000
-    alpha: float = 0.0
-    prewarp: bool = True
-    name: str = "newmark"
-
-
-@dataclass(frozen=True)
-class PaperProtocol:
-    """The paper's fixed ``settle`` + ``window`` seconds per line, from rest."""
-
-    settle: float = 9.0
-    window: float = 1.0
-    steps_per_period: int = 256
-    alpha: float = 0.0
-    name: str = "paper"
-
-
-@dataclass(frozen=True)
-class Campaign:
-    """Force levels x frequency lines.
-
-    Parameters
-    ----------
-    frequency_hz : (n_lines,) line frequencies (Hz), swept in the given order.
-    force : (n_levels,) force amplitudes (N).
-    load : (n,) physical load pattern (multiplied by ``force``).
-    outputs : (n_out,) DOFs whose receptance is recorded.
-    protocol : HBProtocol | NewmarkProtocol | PaperProtocol
-    """
-
-    frequency_hz: np.ndarray
-    force: np.ndarray
-    load: np.ndarray
-    outputs: np.ndarray
-    protocol: object = field(default_factory=HBProtocol)
-
-    def __post_init__(self):
-        f = np.atleast_1d(np.asarray(self.frequency_hz, dtype=float))
-        F = np.atleast_1d(np.asarray(self.force, dtype=float))
-        if f.size < 1 or np.any(~(f > 0)):
-            raise ValueError("frequency lines must be > 0 Hz")
-        if F.size < 1 or np.any(~(F > 0)):
-            raise ValueError("force levels must be > 0 N")
-        object.__setattr__(self, "frequency_hz", f)
-        object.__setattr__(self, "force", F)
-        object.__setattr__(self, "load", np.asarray(self.load, dtype=float))
-        object.__setattr__(self, "outputs", np.atleast_1d(np.asarray(self.outputs, dtype=int)))
-
-
-@dataclass
-class LevelResult:
-    """One force level: receptance (n_lines, n_out) complex (m/N), first-harmonic slips
-    (n_lines, n_joints) complex (m), half peak-to-peak slips (n_lines, n_joints) (m),
-    work per line (Newton iterations or periods), wall time (s)."""
-
-    force: float
-    receptance: np.ndarray
-    slip: np.ndarray
-    slip_amplitude: np.ndarray
-    work: np.ndarray
-    elapsed: float
-
-    def to_npz(self, path: Path) -> None:
-        tmp = path.with_suffix(".tmp.npz")
-        np.savez(tmp, force=self.force, receptance=self.receptance, slip=self.slip,
-                 slip_amplitude=self.slip_amplitude, work=self.work, elapsed=self.elapsed)
-        os.replace(tmp, path)
-
-    @classmethod
-    def from_npz(cls, path: Path) -> "LevelResult":
-        with np.load(path) as d:
-            return cls(float(d["force"]), d["receptance"], d["slip"], d["slip_amplitude"],
-                       d["work"], float(d["elapsed"]))
-
-
-@dataclass
-class CampaignResult:
-    """All levels: ``receptance`` (n_levels, n_lines, n_out), ``slip`` and
-    ``slip_amplitude`` (n_levels, n_lines, n_joints), ``work`` (n_levels, n_lines),
-    ``elapsed`` (n_levels,) seconds, ``computed`` (n_levels,) False for levels loaded
-    from the store, and the campaign ``hash``."""
-
-    frequency_hz: np.ndarray
-    force: np.ndarray
-    receptance: np.ndarray
-    slip: np.ndarray
-    slip_amplitude: np.ndarray
-    work: np.ndarray
-    elapsed: np.ndarray
-    computed: np.ndarray
-    hash: str
-    protocol: str
 
 
 # --------------------------------------------------------------------------- hashing

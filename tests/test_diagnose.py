@@ -11,7 +11,8 @@ from cli.main import main
 from inverse.diagnose import CANDIDATES, diagnose, slip_shapes, tie_ratio
 from ident.measured import write_measured
 from cases.synthetic import generate_case
-from joints.iwan import IwanParameters, describing_function, steady_loop
+from joints.describing import describing_function
+from joints.iwan import IwanParameters, steady_loop
 
 CHIS = [-0.9, -0.75, -0.5, -0.37366, -0.2, -0.05]
 

@@ -22,10 +22,11 @@ import runs.stepped_sine as stepped_sine
 from cli.main import main
 from cases.double_beam.model import build_double_beam
 from ident.measured import read_measured
-from fe.harmonic_balance import aft_joint_force
+from fe.aft import aft_joint_force
 from fe.modal import frf_modal, normal_modes
 from fe.reduction import JointBank, JointedSystem, reduced_basis
-from joints.iwan import IwanParameters, describing_function
+from joints.describing import describing_function
+from joints.iwan import IwanParameters
 
 COARSE = dict(df_hz=1.0, band_hz=(236.0, 268.0), sliders_per_octave=8, weak_joint_scales=())
 

@@ -22,7 +22,8 @@ from inverse.estimate import (
 )
 from ident.measured import MeasuredData, read_measured
 from cases.paper_data import DATA_FILE, PUBLISHED
-from joints.iwan import IwanParameters, describing_function, kappa1, kappa2_exact
+from joints.describing import describing_function, kappa1, kappa2_exact
+from joints.iwan import IwanParameters
 
 
 def run_cli(argv, capsys):

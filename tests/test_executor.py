@@ -12,7 +12,8 @@ import pytest
 from cli.executor_options import add_executor_arguments, executor_from_args
 from runs import executor as ex
 from runs.executor import ExecutorSpec, run_sweep, task_seeds
-from joints.iwan import IwanParameters, describing_function, dissipation_per_cycle
+from joints.describing import describing_function
+from joints.iwan import IwanParameters, dissipation_per_cycle
 from joints.jenkins import discretize, jenkins_update
 
 N_SLIDERS = 60

@@ -4,10 +4,12 @@ import pytest
 from scipy.optimize import brentq
 
 from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
-from fe.harmonic_balance import HBSettings, _synthesis, aft_joint_force, solve_hb
+from fe.aft import aft_joint_force
+from fe.harmonic_balance import HBSettings, _synthesis, solve_hb
 from fe.newmark import NewmarkSettings, integrate
 from fe.reduction import JointBank, JointedSystem, reduced_basis
-from joints.iwan import IwanParameters, describing_function
+from joints.describing import describing_function
+from joints.iwan import IwanParameters
 
 
 @pytest.fixture(scope="module")

@@ -11,17 +11,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
+from joints.describing import _Q_b, describing_function, kappa1, kappa2_exact, kappa2_paper
 from joints.iwan import (
     IwanParameters,
-    _Q_b,
     backbone,
     density,
-    describing_function,
     dissipation_per_cycle,
     force_history,
-    kappa1,
-    kappa2_exact,
-    kappa2_paper,
     masing_branch,
     steady_loop,
 )

@@ -7,13 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from joints.iwan import (
-    IwanParameters,
-    backbone,
-    describing_function,
-    dissipation_per_cycle,
-    force_history,
-)
+from joints.describing import describing_function
+from joints.iwan import IwanParameters, backbone, dissipation_per_cycle, force_history
 from joints.jenkins import JenkinsDiscretization, discretize, discretize_log, jenkins_update
 
 PAPER = IwanParameters(chi=-0.5, K_T=1.1e5, F_S=400.0, beta=4.0)

@@ -1,4 +1,4 @@
-"""Compiled Jenkins-bank kernel (joints/jenkins.py) against a plain numpy update written
+"""Compiled Jenkins-bank kernel (joints/kernel*.py) against a plain numpy update written
 here from the definition: anchors bitwise equal, force and tangent within the
 summation error bound of exactly rounded sums (math.fsum) for random shapes and the
 SIMD block boundaries; broadcasting of the parameters, the stuck rule, non-finite
@@ -13,14 +13,9 @@ from hypothesis import strategies as st
 from numba import njit
 
 from joints.iwan import IwanParameters
-from joints.jenkins import (
-    INTERLEAVE,
-    LANES,
-    bank_update_kernel,
-    discretize,
-    jenkins_update,
-    jenkins_update_into,
-)
+from joints.jenkins import discretize, jenkins_update, jenkins_update_into
+from joints.kernel import bank_update_kernel
+from joints.kernel_reference import INTERLEAVE, LANES
 
 # around SIMD widths (4, 8 lanes), unrolled blocks (16, 32, 64) and numpy's 128 leaves
 LENGTHS = [1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 31, 32, 33, 40, 63, 64, 65, 100, 127, 128,
@@ -141,11 +136,11 @@ def test_parameter_broadcasting_gives_identical_numbers():
 
 
 def documented_order_sum(terms):
-    """The kernel's summation order (joints/jenkins.py, comment above LANES), in numpy:
-    lane m of accumulator u takes the blocks 16 b + 8 u (+ m), a last odd block goes
-    to accumulator 0; accumulator 0 + 1 lane by lane, a tree over the 8 lanes; plus,
-    when n mod 8 >= 4, the tree of the next 4 terms; plus the n mod 4 last terms
-    summed in order."""
+    """The kernel's summation order (joints/kernel_reference.py, comment above LANES),
+    in numpy: lane m of accumulator u takes the blocks 16 b + 8 u (+ m), a last odd
+    block goes to accumulator 0; accumulator 0 + 1 lane by lane, a tree over the 8
+    lanes; plus, when n mod 8 >= 4, the tree of the next 4 terms; plus the n mod 4 last
+    terms summed in order."""
     n = terms.size
     nb = n // LANES
     acc = np.zeros((INTERLEAVE, LANES))

@@ -11,7 +11,8 @@ from cli.main import main
 from cases.lumped10.model import (TABLE1_TEXT, TABLE2_TEXT, LumpedParameters, fit_improved,
                             force_vector, lumped10_system, mode_topology, paper_table)
 from fe.modal import normal_modes
-from joints.iwan import IwanParameters, describing_function
+from joints.describing import describing_function
+from joints.iwan import IwanParameters
 
 PAPER = Path("/work/shared/data/paper")
 

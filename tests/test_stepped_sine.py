@@ -6,8 +6,8 @@ import pytest
 
 from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from fe.reduction import JointBank, reduced_basis
-from runs.stepped_sine import (Campaign, NewmarkProtocol, PaperProtocol,
-                             run_campaign)
+from runs.campaign import Campaign, NewmarkProtocol, PaperProtocol
+from runs.stepped_sine import run_campaign
 
 
 @pytest.fixture(scope="module")

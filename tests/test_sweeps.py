@@ -11,12 +11,14 @@ from scipy.optimize import brentq
 
 from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from runs.executor import ExecutorSpec
-from fe.harmonic_balance import (HBSettings, _ExactIwan, _iwan_df, continuation_exact,
-                                 solve_hb, solve_hb_exact)
+from fe.harmonic_balance import HBSettings, solve_hb
+from fe.hb_exact import _ExactIwan, _iwan_df, continuation_exact, solve_hb_exact
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, integrate
 from fe.reduction import JointedSystem, full_model, reduced_basis
-from runs.stepped_sine import Campaign, NewmarkProtocol, run_campaign
-from joints.iwan import IwanParameters, describing_function
+from runs.campaign import Campaign, NewmarkProtocol
+from runs.stepped_sine import run_campaign
+from joints.describing import describing_function
+from joints.iwan import IwanParameters
 from joints.jenkins import jenkins_update
 
 SDOF_JOINT = IwanParameters(chi=-0.5, K_T=1.1e5, F_S=400.0, beta=4.0)
@@ -153,7 +155,7 @@ def test_full_model_equals_all_modes_basis(lumped):
 
 
 def test_describing_function_derivatives():
-    """_iwan_df equals joints.iwan.describing_function (micro and macro-slip, beta > 0
+    """_iwan_df equals joints.describing.describing_function (micro and macro-slip, beta > 0
     and = 0) and its A-derivatives equal central differences."""
     for p in (SDOF_JOINT, IwanParameters(chi=-0.3, K_T=2e7, F_S=90.0, beta=0.0)):
         J = _ExactIwan([p, p], 2)
@@ -173,7 +175,7 @@ def test_describing_function_derivatives():
 def test_exact_first_harmonic_balance_equals_scalar_root(level):
     """SDOF with the exact Iwan joint: the first-harmonic amplitude solves
     |k_in(A) - m w^2 + i(k_q(A) + w c)| A = P (a scalar root found by Brent's method on
-    joints.iwan.describing_function) to 1e-10, along a sweep through resonance."""
+    joints.describing.describing_function) to 1e-10, along a sweep through resonance."""
     p = SDOF_JOINT
     mass, c, model = sdof()
     A0 = level * p.phi_max

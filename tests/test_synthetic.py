@@ -18,7 +18,8 @@ from cases.synthetic import (
     simulate_level,
     steady_amplitude,
 )
-from joints.iwan import IwanParameters, describing_function, dissipation_per_cycle
+from joints.describing import describing_function
+from joints.iwan import IwanParameters, dissipation_per_cycle
 
 
 def _oscillator(R=2e4, k3=0.0, c2=0.0, beta=1.0):

@@ -139,7 +139,8 @@ from ident.measured import MeasuredData, read_measured, write_measured
 from fe.harmonic_balance import HBSettings
 from fe.modal import normal_modes
 from fe.reduction import JointBank, JointedSystem, ReducedModel, reduced_basis
-from joints.iwan import IwanParameters, kappa1
+from joints.describing import kappa1
+from joints.iwan import IwanParameters
 from joints.jenkins import discretize_log
 
 __all__ = [
@@ -478,7 +479,7 @@ def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy):
     -------
     runs.stepped_sine.Campaign
     """
-    from runs.stepped_sine import Campaign, HBProtocol
+    from runs.campaign import Campaign, HBProtocol
 
     n = model.M.shape[0]
     load = np.zeros(n)
@@ -609,7 +610,7 @@ def modal_filter_levels(freq_hz, receptance, M, phi, drive_dof: int, omega_n: fl
     """
     from scipy.interpolate import CubicSpline
 
-    from joints.iwan import kappa2_exact
+    from joints.describing import kappa2_exact
 
     f = np.asarray(freq_hz, dtype=float)
     D = phi[int(drive_dof)] / (np.asarray(receptance) @ (M @ phi))     # (L, n_lines)
@@ -747,7 +748,7 @@ class DoubleBeamReport:
     def glue_stiffness_loss(self) -> np.ndarray:
         """Per level, the largest relative loss of in-phase stiffness of a joint element at
         its slip at resonance, ``1 - k_in(A)/K_T`` (exact describing function)."""
-        from joints.iwan import describing_function
+        from joints.describing import describing_function
 
         out = np.zeros(self.identification.slip.shape[0])
         for j, p in enumerate(self.setup.params):

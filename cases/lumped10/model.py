@@ -295,7 +295,7 @@ def _model_inverse_receptance(system, shape, load, omega, slip_amplitude, R, chi
     """``D`` of paper eq. 26 without the decoupling of eq. 29-30: each joint ``m`` adds
     the complex stiffness ``(-kappa2 + i |kappa1|) A_m^(chi+1)`` (exact micro-slip
     kappas of eq. 14/A15) on its slip, at the joint amplitudes ``A`` of each line."""
-    from joints.iwan import kappa1, kappa2_exact
+    from joints.describing import kappa1, kappa2_exact
 
     w = np.asarray(omega, dtype=float)
     G = np.asarray(system.G)
@@ -533,8 +533,8 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
 
     from inverse.estimate import b_tilde, estimate, kappa1_per_R, r_tilde
     from ident.measured import MeasuredData
-    from runs.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
-                                 run_campaign, run_level)
+    from runs.campaign import Campaign, HBProtocol, NewmarkProtocol, PaperProtocol
+    from runs.stepped_sine import run_campaign, run_level
 
     protocols = {"default": HBProtocol(), "hb": HBProtocol(), "newmark": NewmarkProtocol(),
                  "paper": PaperProtocol()}

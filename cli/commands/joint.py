@@ -13,16 +13,8 @@ import math
 import numpy as np
 
 from runs.jsonio import print_json
-from joints.iwan import (
-    IwanParameters,
-    backbone,
-    describing_function,
-    dissipation_per_cycle,
-    kappa1,
-    kappa2_exact,
-    kappa2_paper,
-    steady_loop,
-)
+from joints.describing import describing_function, kappa1, kappa2_exact, kappa2_paper
+from joints.iwan import IwanParameters, backbone, dissipation_per_cycle, steady_loop
 
 NAME = "joint"
 DEFAULT_FRACTIONS = (0.1, 0.5, 1.0, 2.0)
