@@ -24,8 +24,8 @@ import numpy as np
 from numba import njit
 
 from fe.reduction import JointBank
+from joints import kernel
 from joints.jenkins import jenkins_update
-from joints.kernel import bank_update_kernel
 from joints.kernel_reference import KERNEL_STAMP
 
 __all__ = ["aft_joint_force"]
@@ -127,7 +127,7 @@ def _compile(kernel_stamp):
             for step in range(N):
                 n = (i_max + step) % N
                 s1[0] = slip_t[j, n]
-                bank_update_kernel(s1, x, kj, pj, trial, F1, T1)
+                kernel.bank_update_kernel(s1, x, kj, pj, trial, F1, T1)
                 F = F1[0]
                 kt = T1[0]
                 kslip = 0.0

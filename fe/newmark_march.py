@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from joints import kernel
 from joints.jenkins import jenkins_update
-from joints.kernel import bank_update_kernel
 from joints.kernel_reference import KERNEL_STAMP
 
 __all__ = ["march", "reference_loop"]
@@ -192,7 +192,7 @@ def _compile(kernel_stamp):
             converged = False
             for _ in range(max_iter):
                 iters += 1
-                bank_update_kernel(s, anchor, k, phi, trial, F, kt)
+                kernel.bank_update_kernel(s, anchor, k, phi, trial, F, kt)
                 for j in range(nj):
                     g[j] = F[j] - K_T[j] * s[j]
                 smax = 0.0

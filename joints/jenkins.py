@@ -35,8 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from joints import kernel
 from joints.iwan import IwanParameters
-from joints.kernel import bank_update_kernel
 
 __all__ = ["JenkinsDiscretization", "discretize", "discretize_log", "jenkins_update",
            "jenkins_update_into"]
@@ -186,8 +186,9 @@ def _as_float(a):
 
 def _kernel_operands(slip, anchor, stiffness, slip_limit):
     """(stiffness, slip_limit) as 2-D (1 or n_joints, n_sliders) views for
-    :func:`bank_update_kernel`, or None when the shapes are not the contract's (the
-    numpy path then broadcasts). All inputs are float64 C-contiguous already."""
+    :func:`joints.kernel.bank_update_kernel`, or None when the shapes are not the
+    contract's (the numpy path then broadcasts). All inputs are float64 C-contiguous
+    already."""
     if anchor.ndim != 2 or slip.ndim != 1:
         return None
     n_joints, n_sliders = anchor.shape
@@ -217,8 +218,8 @@ def jenkins_update(slip, anchor, stiffness, slip_limit):
 
     Pure function: the committed ``anchor`` is not modified; the caller commits
     ``anchor_new`` once the step is accepted. Runs the compiled kernel
-    (:func:`bank_update_kernel`) for the shapes below, the numpy reference for other
-    broadcastable shapes: the same anchors, sums equal to rounding.
+    (:func:`joints.kernel.bank_update_kernel`) for the shapes below, the numpy form for
+    other broadcastable shapes: the same anchors, sums equal to rounding.
 
     Parameters
     ----------
@@ -248,7 +249,7 @@ def jenkins_update(slip, anchor, stiffness, slip_limit):
     force = np.empty(slip.shape[0])
     tangent = np.empty(slip.shape[0])
     anchor_new = np.empty_like(anchor)
-    bank_update_kernel(slip, anchor, ops[0], ops[1], anchor_new, force, tangent)
+    kernel.bank_update_kernel(slip, anchor, ops[0], ops[1], anchor_new, force, tangent)
     return force, tangent, anchor_new
 
 
@@ -307,5 +308,6 @@ def jenkins_update_into(slip, anchor, stiffness, slip_limit, out_anchor,
         out_force[...] = force
         out_tangent[...] = tangent
     else:
-        bank_update_kernel(slip, anchor, ops[0], ops[1], out_anchor, out_force, out_tangent)
+        kernel.bank_update_kernel(slip, anchor, ops[0], ops[1], out_anchor, out_force,
+                                  out_tangent)
     return out_force, out_tangent

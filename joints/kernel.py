@@ -1,8 +1,10 @@
 """The compiled Jenkins-bank kernel that solvers call: selection, self-check, fallback.
 
-:func:`bank_update_kernel` is the return mapping of a bank of Jenkins elements, callable
-from Python and from numba-compiled step loops (``fe.aft``, ``fe.newmark_march``). It
-runs one of two compiled implementations, bitwise equal to each other:
+``bank_update_kernel`` is the return mapping of a bank of Jenkins elements (arguments
+in :func:`compiled_kernel`), callable from Python and from numba-compiled step loops
+(``fe.aft``, ``fe.newmark_march``), which write ``kernel.bank_update_kernel(...)``
+after ``from joints import kernel``. It is one of two compiled implementations, bitwise
+equal to each other:
 
 * :data:`joints.kernel_ir.ir_bank_update`, the fast hand-written 8-lane vector IR;
 * :func:`joints.kernel_reference.bank_update_reference`, the plain loop in the same
@@ -11,8 +13,9 @@ runs one of two compiled implementations, bitwise equal to each other:
 Fallback. The IR kernel depends on llvmlite's IR builder and on numba internals (the
 ``@intrinsic`` lowering API, the private ``_nrt`` target option), which an upgrade of
 numba or llvmlite may change. :func:`compiled_kernel` therefore chooses once per
-process, on the first use (never at import: the command line imports this module
-and most commands never call the kernel): it imports and compiles the IR kernel and
+process, on the first access to ``bank_update_kernel`` (a module attribute that
+appears then; never at import: the command line imports this module and most commands
+never call the kernel; a caller loaded from numba's cache does not ask): it imports and compiles the IR kernel and
 runs it on a few small banks that take every code path (blocks of 8 and 4, tail,
 shared and per-joint parameters, in place and not), comparing force, tangent and
 anchors bit for bit with the reference loop run as plain Python. Any failure (import,
@@ -36,12 +39,11 @@ that the cached caller runs the edited code.
 """
 from __future__ import annotations
 
-import functools
 import warnings
+from typing import Callable
 
 import numpy as np
 from numba import njit
-from numba.extending import overload
 
 from joints.kernel_reference import bank_update_reference
 
@@ -93,16 +95,9 @@ def _self_check(kernel) -> None:
                                          f"on a {anchor.shape[1]}-slider check bank")
 
 
-@functools.lru_cache(maxsize=None)
-def compiled_kernel():
-    """The compiled bank update this process uses (chosen once; module docstring).
-
-    Returns
-    -------
-    numba dispatcher
-        The IR kernel if it imports, compiles and passes the self-check, else the
-        compiled reference loop, after one :class:`KernelFallbackWarning`.
-    """
+def _select_kernel():
+    """The IR kernel if it imports, compiles and passes the self-check, else the
+    compiled reference loop after one :class:`KernelFallbackWarning`."""
     try:
         kernel = _ir_kernel()
         _self_check(kernel)
@@ -113,45 +108,44 @@ def compiled_kernel():
             f"the compiled Jenkins kernel (hand-written vector IR, joints/kernel_ir.py) "
             f"cannot be used with this numba/llvmlite ({type(exc).__name__}: {reason}); "
             f"using the reference loop instead: results stay correct (bitwise the same) "
-            f"but the joint updates are slower"), stacklevel=2)
+            f"but the joint updates are slower"), stacklevel=3)
         return _compiled_reference
 
 
-def bank_update_kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
-    """Compiled Jenkins-bank return mapping (the kernel of
-    :func:`joints.jenkins.jenkins_update`), from Python or from ``@njit`` code.
+def compiled_kernel():
+    """The compiled bank update of this process, chosen on the first call (module
+    docstring) and from then on the module attribute :data:`bank_update_kernel`.
 
-    Callable from other ``@njit`` code (solvers' step loops; pass preallocated arrays,
-    not slices made per call: a view costs more than a small bank). Single-threaded, no
-    heap allocation (the IR kernel). Numbers: bitwise those of
-    :func:`joints.kernel_reference.bank_update_reference` (sums in its fixed order).
-
-    Parameters
-    ----------
-    slip : float64[n_joints]
-        Joint slips (m).
-    anchor : float64[n_joints, n_sliders], C-contiguous
-        Committed slider positions (m); only read (unless it is ``out_anchor``).
-    stiffness, slip_limit : float64[n_rows, n_sliders], C-contiguous
-        ``k_i`` (N/m) and ``phi_i`` (m); ``n_rows`` is 1 (shared by all joints) or
-        ``n_joints``.
-    out_anchor : float64[n_joints, n_sliders], C-contiguous
-        Receives the trial slider positions (m); may be ``anchor`` itself (commit in
-        place). Other overlaps are not allowed.
-    force, tangent : float64[n_joints]
-        Receive the joint force (N) and tangent stiffness (N/m).
+    Returns
+    -------
+    numba dispatcher
+        ``kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent)``,
+        arguments as :func:`joints.kernel_reference.bank_update_reference`: slips
+        ``float64[n_joints]`` (m); committed anchors ``float64[n_joints, n_sliders]``
+        (m), only read unless they are ``out_anchor``; stiffnesses (N/m) and slip limits
+        (m) ``float64[n_rows, n_sliders]`` with ``n_rows`` 1 (shared by all joints) or
+        ``n_joints``; ``out_anchor`` receives the trial anchors (may be ``anchor``
+        itself, no other overlap); ``force`` and ``tangent`` ``float64[n_joints]``
+        receive the joint forces (N) and tangent stiffnesses (N/m). All C-contiguous.
+        Callable from Python and from ``@njit`` code (solvers' step loops: pass
+        preallocated arrays, not slices made per call; a view costs more than a small
+        bank); single-threaded, no heap allocation (the IR kernel).
     """
-    compiled_kernel()(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent)
+    kernel = globals().get("bank_update_kernel")
+    if kernel is None:
+        kernel = _select_kernel()
+        globals()["bank_update_kernel"] = kernel
+    return kernel
 
 
-@overload(bank_update_kernel)
-def _bank_update_kernel_compiled(slip, anchor, stiffness, slip_limit, out_anchor, force,
-                                 tangent):
-    """:func:`bank_update_kernel` inside compiled code: the kernel is chosen when the
-    first caller is compiled (a caller loaded from numba's cache needs no choice)."""
-    kernel = compiled_kernel()
+# The kernel, as a module attribute that appears on first access: compiled callers
+# write ``kernel.bank_update_kernel(...)`` (numba resolves it when the caller is
+# compiled, which is when the kernel is chosen), Python callers likewise at call time.
+bank_update_kernel: Callable
 
-    def impl(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
-        kernel(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent)
 
-    return impl
+def __getattr__(name: str):
+    """Module attribute hook: the first access to ``bank_update_kernel`` chooses it."""
+    if name == "bank_update_kernel":
+        return compiled_kernel()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
