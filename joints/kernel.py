@@ -47,7 +47,7 @@ from numba import njit
 
 from joints.kernel_reference import bank_update_reference
 
-__all__ = ["bank_update_kernel", "compiled_kernel", "KernelFallbackWarning"]
+__all__ = ["bank_update_kernel", "compiled_kernel", "reference_kernel", "KernelFallbackWarning"]
 
 
 class KernelFallbackWarning(RuntimeWarning):
@@ -55,7 +55,7 @@ class KernelFallbackWarning(RuntimeWarning):
 
 
 # the fallback: the reference loop compiled as it is (cached: it lives in one file)
-_compiled_reference = njit(cache=True)(bank_update_reference)
+reference_kernel = njit(cache=True)(bank_update_reference)
 
 
 def _ir_kernel():
@@ -103,13 +103,13 @@ def _select_kernel():
         _self_check(kernel)
         return kernel
     except Exception as exc:  # noqa: BLE001 - any failure: the reference loop
-        reason = (str(exc).strip().splitlines() or [""])[0][:300]
+        reason = " ".join(str(exc).split())[:300]
         warnings.warn(KernelFallbackWarning(
             f"the compiled Jenkins kernel (hand-written vector IR, joints/kernel_ir.py) "
             f"cannot be used with this numba/llvmlite ({type(exc).__name__}: {reason}); "
             f"using the reference loop instead: results stay correct (bitwise the same) "
             f"but the joint updates are slower"), stacklevel=3)
-        return _compiled_reference
+        return reference_kernel
 
 
 def compiled_kernel():

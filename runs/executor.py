@@ -293,8 +293,10 @@ def _connect(spec):
         return client, None, True
     with warnings.catch_warnings():  # "Port 8787 is already in use": another port is used
         warnings.filterwarnings("ignore", message="Port .* is already in use")
+        # on the loopback interface, any free port, no dashboard: nothing to resolve or
+        # to collide with (the workers are this machine's processes)
         cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1,
-                               processes=True, dashboard_address=None)
+                               processes=True, host="127.0.0.1", dashboard_address=None)
     try:
         client = Client(cluster)
     except BaseException:

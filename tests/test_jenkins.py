@@ -171,10 +171,26 @@ def test_bank_describing_function_and_loop_energy():
         assert area == pytest.approx(per_slider, rel=1e-5)
 
 
-def test_dataclass_fields():
-    d = JenkinsDiscretization(stiffness=np.ones(3), slip_limit=np.arange(1.0, 4.0))
+def test_hand_built_bank_against_its_closed_forms():
+    """A bank of three sliders built by hand (k = 1, 2, 3 N/m at phi = 1, 2, 3 m): its
+    virgin loading curve is ``F(u) = sum k_i min(u, phi_i)`` with tangent the stiffness
+    of the sliders not yet slipping, and the loop of amplitude A dissipates
+    ``sum_{phi_i < A} 4 k_i phi_i (A - phi_i)`` (each slider's rectangle), worked out
+    here by hand: 12.5 N and 3 N/m at u = 2.5 m; 4 (1)(1)(1.5) + 4 (2)(2)(0.5) = 14 J
+    at A = 2.5 m. Steps of 0.25 m put every kink of the loop on a sample, so the
+    trapezoidal loop area is exact to rounding."""
+    d = JenkinsDiscretization(stiffness=np.array([1.0, 2.0, 3.0]),
+                              slip_limit=np.array([1.0, 2.0, 3.0]))
     assert d.n_sliders == 3
-    assert math.isclose(d.stiffness.sum(), 3.0)
+    up = np.linspace(0.0, 2.5, 11)
+    u = np.concatenate([up, np.linspace(2.5, -2.5, 21)[1:], np.linspace(-2.5, 2.5, 21)[1:]])
+    F, T = simulate(d, u)
+    assert F[10, 0] == 12.5 and T[10, 0] == 3.0
+    assert F[2, 0] == 0.5 * 6.0 and T[2, 0] == 6.0        # u = 0.5 m: all stuck
+    assert F[-1, 0] == 12.5                                # the loop closes
+    loop_F, loop_u = F[10:, 0], u[10:]                     # from u = A down and back
+    area = 0.5 * np.sum((loop_F[1:] + loop_F[:-1]) * np.diff(loop_u))    # work done on it
+    assert area == pytest.approx(14.0, rel=1e-14)
 
 
 @pytest.mark.parametrize("chi", [-0.5, -0.2])

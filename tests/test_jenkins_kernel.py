@@ -14,8 +14,8 @@ from numba import njit
 
 from joints.iwan import IwanParameters
 from joints.jenkins import discretize, jenkins_update, jenkins_update_into
-from joints.kernel import bank_update_kernel
-from joints.kernel_reference import INTERLEAVE, LANES
+from joints.kernel import bank_update_kernel, reference_kernel
+from joints.kernel_reference import INTERLEAVE, LANES, bank_update_reference
 
 # around SIMD widths (4, 8 lanes), unrolled blocks (16, 32, 64) and numpy's 128 leaves
 LENGTHS = [1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 31, 32, 33, 40, 63, 64, 65, 100, 127, 128,
@@ -172,6 +172,30 @@ def test_sums_follow_the_documented_order_bit_for_bit(n_sliders):
         stuck_k = np.where(new[j] == anchor[j], k[j], 0.0)
         assert bits(F[j]) == bits(documented_order_sum(terms))
         assert bits(T[j]) == bits(documented_order_sum(stuck_k))
+
+
+@pytest.mark.parametrize("n_sliders", [1, 3, 4, 5, 7, 8, 9, 12, 15, 16, 17, 23, 24, 25, 33,
+                                       40, 100, 257])
+def test_reference_loop_gives_the_kernels_bits(n_sliders):
+    """The plain reference loop (joints/kernel_reference.py), run as plain Python and
+    compiled by numba (the fallback), gives bitwise the kernel's force, tangent and
+    anchors, shared or per-joint parameters, in place or not; and its sums are the
+    numpy replay of the documented order (an independent third writing of it)."""
+    rng = np.random.default_rng(300 + n_sliders)
+    for pk, pp in ((True, False), (False, True)):
+        slip, anchor, k, phi = random_bank(rng, 3, n_sliders, pk, pp)
+        anchor[0, 0] = slip[0] - np.atleast_2d(phi)[0, 0]          # on its limit
+        k2, phi2 = np.atleast_2d(k), np.atleast_2d(phi)
+        ref = [np.empty_like(anchor), np.empty(3), np.empty(3)]
+        bank_update_reference(slip, anchor, k2, phi2, *ref)
+        F, T, new = jenkins_update(slip, anchor, k, phi)
+        assert_bitwise((ref[1], ref[2], ref[0]), (F, T, new))
+        state = anchor.copy()
+        fo, to = np.empty(3), np.empty(3)
+        reference_kernel(slip, state, k2, phi2, state, fo, to)
+        assert_bitwise((fo, to, state), (F, T, new))
+        terms = (slip[2] - new[2]) * k2[-1]
+        assert bits(ref[1][2]) == bits(documented_order_sum(terms))
 
 
 def test_stuck_means_anchor_unchanged_and_full_tangent():
