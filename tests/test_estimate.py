@@ -322,6 +322,22 @@ def test_r_scales_with_force_scale_double_beam():
     np.testing.assert_allclose(e1.case.slip_amplitudes, one_mode, rtol=0.01)
 
 
+def test_cli_case_resolves_through_the_registry(capsys):
+    """``--case NAME`` gives the estimate of the registry's model, labelled NAME; no
+    model leaves B and R null."""
+    code, out, err = run_cli(["estimate", str(DATA_FILE), "--fit-levels", "1-7",
+                              "--case", "double-beam", "--json"], capsys)
+    assert code == 0, err
+    res = json.loads(out)
+    data = read_measured(DATA_FILE)
+    lib = estimate(data, "1-7", "paper", model=build_case("double-beam"))
+    assert res["case"]["name"] == "double-beam" and lib.case.name == "model"
+    assert res["R"] == pytest.approx(lib.R, rel=1e-12)
+    assert res["case"]["fe_mode"] == lib.case.fe_mode
+    bare = estimate(data, "1-7", "paper")
+    assert bare.B is None and bare.R is None and bare.case is None
+
+
 def test_joint_slip_solver_matches_dense_solve():
     model = lumped_model()
     w, _ = model.modes(3)
