@@ -9,7 +9,7 @@ import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq
 
-from cli.commands.modes import double_beam_report
+from cases.double_beam.mode_table import double_beam_report
 from cases.double_beam.model import (
     MEASURED_FREQUENCY_HZ,
     DoubleBeamConfig,

@@ -20,7 +20,7 @@ import cases.double_beam.uncertainty as unc
 from cli.main import main
 from cases.double_beam.model import build_double_beam
 from cases.double_beam.study import DoubleBeamStudy, measured_levels, run_study
-from inverse.estimate import kappa_ratio, zeta_with_joint
+from inverse.iwan_modal import kappa_ratio, zeta_with_joint
 from runs.executor import ExecutorSpec, task_seeds
 
 COARSE = dataclasses.replace(unc.SAMPLE_STUDY, n_levels=7, df_hz=1.0, band_hz=(240.0, 264.0),

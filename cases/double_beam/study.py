@@ -126,15 +126,8 @@ from cases.paper_data import DATA_FILE
 import numpy as np
 import scipy.sparse as sp
 
-from inverse.estimate import (
-    DEFAULT_FORCE_SCALE,
-    METHODS,
-    b_tilde,
-    estimate,
-    kappa_ratio,
-    parse_levels,
-    r_tilde,
-)
+from inverse.estimate import DEFAULT_FORCE_SCALE, METHODS, estimate, parse_levels
+from inverse.iwan_modal import b_tilde, kappa_ratio, r_tilde
 from ident.measured import MeasuredData, read_measured, write_measured
 from fe.harmonic_balance import HBSettings
 from fe.modal import normal_modes

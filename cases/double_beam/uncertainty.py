@@ -98,7 +98,7 @@ from cases.double_beam.study import (
     nonlinear_model,
     source_estimate,
 )
-from inverse.estimate import r_tilde
+from inverse.iwan_modal import r_tilde
 from runs.executor import ExecutorSpec, run_sweep, task_seeds
 from runs.store import open_manifest
 from fe.harmonic_balance import HBSettings

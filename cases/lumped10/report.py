@@ -73,8 +73,8 @@ class ModeResult:
     zeta: np.ndarray                  # (12,) identified damping ratio
     table1: np.ndarray                # (12, 2) joint amplitudes at the identified resonance
     fit_levels: list
-    paper_estimate: object            # inverse.estimate.Estimate (method "paper")
-    amplitude_estimate: object        # inverse.estimate.Estimate (method "amplitude")
+    paper_estimate: object            # inverse.estimate_result.Estimate (method "paper")
+    amplitude_estimate: object        # inverse.estimate_result.Estimate (method "amplitude")
     B_inverse: float
     B_simulated: float
     R_paper: float

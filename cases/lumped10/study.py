@@ -111,7 +111,8 @@ def run_study(study: LumpedStudy = LumpedStudy(), protocol: str = "default", sto
     """
     import time as _time
 
-    from inverse.estimate import b_tilde, estimate, kappa1_per_R, r_tilde
+    from inverse.estimate import estimate
+    from inverse.iwan_modal import b_tilde, kappa1_per_R, r_tilde
     from ident.measured import MeasuredData
     from runs.stepped_sine import (Campaign, HBProtocol, NewmarkProtocol, PaperProtocol,
                                  run_campaign, run_level)
