@@ -13,9 +13,9 @@ from cli.commands.modes import double_beam_report
 from cases.double_beam.model import (
     MEASURED_FREQUENCY_HZ,
     DoubleBeamConfig,
-    StripGeometry,
     build_double_beam,
 )
+from fe.interface import StripGeometry
 
 BARE = DoubleBeamConfig(exciter_mass=0.0, sensor_mass=0.0, glue_sensors=False, clamp_length=0.0)
 BETA_L = np.array([1.875104068711961, 4.694091132974175, 7.854757438237613, 10.99554073487547])  # Blevins
