@@ -34,27 +34,11 @@ def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: 
               workers: int = 1, model=None, executor=None) -> DoubleBeamReport:
     """Run the double-beam reproduction (module docstring).
 
-    Parameters
-    ----------
-    study : DoubleBeamStudy
-    store : path, optional
-        Parent directory of the resumable campaign stores ``campaign-hb-<hash12>``
-        (:func:`runs.stepped_sine.run_campaign`): finished levels are loaded, not recomputed.
-    progress : bool
-        tqdm bars on stderr.
-    workers : int
-        Without ``executor``: levels computed in that many local processes.
-    model : cases.double_beam.model.DoubleBeamModel, optional
-        Default: :func:`cases.double_beam.model.build_double_beam` (the shipped case).
-    executor : str or runs.executor.ExecutorSpec, optional
-        Where the levels run (:func:`runs.stepped_sine.run_campaign`); results are bitwise
-        the same. A local cluster or pool is started per campaign (one per weak-joint
-        rerun as well).
-
-    Returns
-    -------
-    DoubleBeamReport
-        With ``weak_joint_rows`` (one per ``study.weak_joint_scales``).
+    The parameters are those of :func:`cases.double_beam.pipeline.simulate_study`; the
+    model (default: the shipped case), the campaign store's parent directory, the
+    progress bars and the executor serve the weak-joint reruns too (a local cluster or
+    pool is started per campaign). Returns the :class:`DoubleBeamReport` of the study
+    with ``weak_joint_rows`` (one per ``study.weak_joint_scales``).
     """
     model = build_double_beam() if model is None else model
     rep = simulate_study(study, store=store, progress=progress, workers=workers, model=model,
