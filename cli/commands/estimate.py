@@ -62,34 +62,6 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def plot_estimate(est, path: str, title: str | None = None) -> None:
-    """Draw the Fig. 8-style log-slope plot of an :class:`~inverse.estimate.Estimate`."""
-    from viz.logslope import plot_logslope
-
-    used = sorted(est.points_used, key=lambda p: p["x"])
-    held = [d for d in est.differences if not d["in_fit"]]
-    nonpos = [p["x"] for p in est.points_excluded]
-    nonpos += [d["x"] for d in held if d["y"] is None]
-    held_pos = [d for d in held if d["y"] is not None]
-    fit_curve = sorted(est.points_used + est.points_excluded, key=lambda p: p["x"])
-    pred = sorted([d for d in held if d["x"] > fit_curve[-1]["x"]], key=lambda p: p["x"])
-    if pred:
-        pred = [fit_curve[-1]] + pred
-    ci = est.chi_interval
-    note = (f"chi = {est.chi:.4f}  [{ci[0]:.2f}, {ci[1]:.2f}]\n"
-            f"|kappa1|B = {est.kappa1_B:.4g} 1/s^2\nmethod {est.method}")
-    if est.R is not None:
-        note += f"\nR~ = {est.R:.4g} N/m^(chi+2)"
-    plot_logslope(
-        [p["x"] for p in used], [p["y"] for p in used],
-        [p["x"] for p in fit_curve], [p["model_y"] for p in fit_curve],
-        x_held=[d["x"] for d in held_pos], y_held=[d["y"] for d in held_pos],
-        x_nonpositive=nonpos,
-        x_pred=[p["x"] for p in pred], y_pred=[p["model_y"] for p in pred],
-        labels_used=[f"{p['from_level']}->{p['to_level']}" for p in used],
-        base=est.log_base, title=title, annotation=note, path=path)
-
-
 def run(args) -> int:
     if not math.isfinite(args.force_scale) or args.force_scale <= 0:
         raise ValueError(f"--force-scale must be a positive number, got {args.force_scale}")
@@ -99,6 +71,8 @@ def run(args) -> int:
                    model=model, case_name=args.case or "model", force_scale=args.force_scale,
                    fe_mode=args.fe_mode, confidence=args.confidence)
     if args.plot:
+        from viz.logslope import plot_estimate
+
         plot_estimate(est, args.plot, title=f"{args.file}: mode {est.mode}")
     if args.json:
         out = est.to_dict()

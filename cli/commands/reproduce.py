@@ -151,7 +151,7 @@ _DOUBLE_BEAM_ONLY = ("data", "fit_levels", "force_scale", "beta", "chi", "R_join
 
 
 def _run_lumped(args) -> int:
-    from cli.commands.estimate import plot_estimate
+    from viz.logslope import plot_estimate
     from cases.lumped10.study import MODE_BANDS, LumpedStudy, run_study
     from viz.frf_plots import plot_damping_growth, plot_frf_levels
 
@@ -203,7 +203,7 @@ def _run_lumped(args) -> int:
 
 
 def _double_beam_study(args):
-    from cases.double_beam.study import DoubleBeamStudy
+    from cases.double_beam.settings import DoubleBeamStudy
 
     if args.protocol != "default":
         raise ValueError("--protocol applies to the lumped target only (double-beam uses "
@@ -234,7 +234,7 @@ def _double_beam_study(args):
 
 
 def _double_beam_text(rep, files, wall) -> str:
-    from cases.double_beam.study import headline
+    from cases.double_beam.statements import headline
 
     lines = ["Double beam (paper section 4): FE model + Iwan glue joints, "
              f"{rep.campaign.force.size} levels x {rep.campaign.frequency_hz.size} lines", ""]
@@ -279,7 +279,8 @@ def _double_beam_text(rep, files, wall) -> str:
 
 
 def _run_double_beam(args) -> int:
-    from cases.double_beam.study import run_study, write_report
+    from cases.double_beam.files import write_report
+    from cases.double_beam.study import run_study
 
     t0 = time.perf_counter()
     study = _double_beam_study(args)
