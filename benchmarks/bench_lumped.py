@@ -27,8 +27,8 @@ import time
 
 import numpy as np
 
+from cases.lumped10.study import MODE_BANDS, LumpedStudy, lumped10_setup
 from ident.identify import identify_modes
-from cases.lumped10.model import MODE_BANDS, LumpedStudy, lumped10_setup
 from runs.campaign import Campaign, HBProtocol, NewmarkProtocol, PaperProtocol
 from runs.stepped_sine import run_campaign
 

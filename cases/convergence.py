@@ -142,6 +142,16 @@ def cantilever_study(elements=CANTILEVER_ELEMENTS, n_modes: int = 6,
     }
 
 
+def joint_spacing(n_joints, glue_length: float | None = None) -> np.ndarray:
+    """Spacing (m) of ``n_joints`` joint elements spread evenly over the glued zone,
+    ``glue_length / (n - 1)`` (default: the shipped double beam's glue length)."""
+    if glue_length is None:
+        from cases.double_beam.model import DoubleBeamConfig
+
+        glue_length = DoubleBeamConfig().glue_length
+    return glue_length / (np.asarray(n_joints, float) - 1.0)
+
+
 def _measured_mode(model):
     from cases.double_beam.model import MEASURED_BENDING_ORDER
 
@@ -200,7 +210,7 @@ def double_beam_study(element_sizes=DOUBLE_BEAM_ELEMENT_SIZES, joints=DOUBLE_BEA
                 "glue_slip_rate": observed_rate(h, np.abs(dp), usable)}
 
     es = sweep(out["element_size"], "element_size_m", np.array(element_sizes, float))
-    js = sweep(out["joints"], "n_joints", base.glue_length / (np.array(joints, float) - 1))
+    js = sweep(out["joints"], "n_joints", joint_spacing(joints, base.glue_length))
     d = out["default"][0]
     # default-mesh error: against the finest of both sweeps (each refines one ingredient)
     f_ref = es["frequency_hz"][-1] + js["frequency_hz"][-1] - d["frequency_hz"]

@@ -1,6 +1,6 @@
 """The ``iwanfe`` command: parses, calls, prints.
 
-Every sub-command lives in ``cases/commands/<name>.py``. Bad input (``ValueError``,
+Every sub-command lives in ``cli/commands/<name>.py``. Bad input (``ValueError``,
 including :class:`ident.errors.InputError`, or an unreadable file) is reported as one
 line on stderr with exit status 2, never as a traceback.
 """

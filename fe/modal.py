@@ -8,7 +8,8 @@ summation (paper eq. 31 with the joint terms removed)::
 with modal damping ``zeta_n`` given directly or from proportional damping
 ``C = a M + b K``: ``zeta_n = a / (2 omega_n) + b omega_n / 2`` (paper eq. 28). With all
 modes kept and proportional damping this is exact; it equals the direct solution of
-``(K - omega^2 M + i omega C) x = f`` (:func:`frf_direct`).
+``(K - omega^2 M + i omega C) x = f`` (:func:`frf_direct`). The modal filter
+(:func:`modal_inverse_receptance`) goes back from a response of every DOF to one mode.
 """
 from __future__ import annotations
 
@@ -174,3 +175,15 @@ def frf_direct(omega, K, M, force, C=None, response=None) -> np.ndarray:
         x = spla.spsolve((K - w**2 * M + 1j * w * C).tocsc(), f)
         out.append(x if response is None else x[response])
     return np.array(out)
+
+
+def modal_inverse_receptance(receptance, shape, M, load) -> np.ndarray:
+    """Inverse modal receptance by modal filtering, ``D = (phi.f)/(phi.M x)``.
+
+    For a linear structure with proportional damping ``D(w) = w_n^2 - w^2 + i w c_n``
+    exactly (the other modes are filtered out by mass orthogonality); with joints,
+    ``D`` carries the joints' describing-function stiffness and damping as seen by
+    the mode (paper eq. 26 projected on ``phi``). ``receptance`` (..., n_dof) complex
+    per newton; returns (...,) complex (rad^2/s^2).
+    """
+    return (shape @ load) / (np.asarray(receptance) @ (M @ shape))

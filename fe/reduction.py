@@ -24,6 +24,7 @@ reduced coordinates by ``s = (G Phi) q``. SI units: kg, N/m, N s/m, m.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -33,7 +34,7 @@ import scipy.sparse as sp
 
 from fe.modal import normal_modes
 from joints.iwan import IwanParameters
-from joints.jenkins import discretize, jenkins_update
+from joints.jenkins import discretize, discretize_log, jenkins_update
 
 __all__ = [
     "JointedSystem",
@@ -41,6 +42,7 @@ __all__ = [
     "ReducedModel",
     "rayleigh_damping",
     "reduced_basis",
+    "ritz_basis",
     "full_model",
 ]
 
@@ -153,6 +155,30 @@ class JointBank:
             raise ValueError(f"every joint's discretization needs the same number of "
                              f"sliders, got {sorted(sizes)}")
         return cls(np.array([d.stiffness for d in discs]), np.array([d.slip_limit for d in discs]))
+
+    @classmethod
+    def log_spaced(cls, params, a_low: float, sliders_per_octave: int = 16) -> "JointBank":
+        """Jenkins banks with slip limits spaced geometrically, one row per joint.
+
+        :func:`joints.jenkins.discretize_log` of every joint (``sliders_per_octave``
+        sliders per octave of slip limit from ``phi_max`` down to ``a_low``, exact cell
+        moments, stiffnesses summing to ``K_T``; its docstring states the accuracy). The
+        joints share one slider grid, so they need the same ``phi_max`` and ``chi``.
+
+        Parameters
+        ----------
+        params : sequence of IwanParameters
+            One per joint, equal ``phi_max`` and ``chi``.
+        a_low : float
+            Lowest resolved slip limit (m), ``0 < a_low < phi_max``.
+        sliders_per_octave : int
+        """
+        params = list(params)
+        pm, chi = params[0].phi_max, params[0].chi
+        if any(not np.isclose(p.phi_max, pm, rtol=1e-12) or p.chi != chi for p in params):
+            raise ValueError("JointBank.log_spaced: all joints need the same phi_max and chi")
+        return cls.from_discretizations(
+            discretize_log(p, a_low, sliders_per_octave) for p in params)
 
     @property
     def n_joints(self) -> int:
@@ -305,6 +331,28 @@ def reduced_basis(system: JointedSystem, n_modes: int | None = None,
     Cr = 0.5 * (Cr + Cr.T)
     return ReducedModel(basis=phi, omega=omega, M=Mr, K=Kr, C=Cr, G=np.asarray(Gr),
                         K_T=system.K_T.copy(), n_modes=n_kept)
+
+
+def ritz_basis(system: JointedSystem, n_modes: int, zeta: float) -> ReducedModel:
+    """Stuck-joint modes + static joint modes with modal damping.
+
+    The Ritz basis of :func:`reduced_basis` with ``static_joint_modes`` (``n_modes``
+    normal modes of ``(K_J, M)`` plus ``K_J^-1 G^T``, re-diagonalized so that ``Phi^T M
+    Phi = I``, ``Phi^T K_J Phi = diag(omega^2)``), with modal damping ``C_r = diag(2
+    zeta omega_r)`` (paper eq. 28 with one ratio for every vector) instead of the
+    projected ``system.C``.
+
+    Parameters
+    ----------
+    system : JointedSystem
+    n_modes : int
+    zeta : float
+        Modal damping ratio.
+    """
+    red = reduced_basis(system, n_modes=int(n_modes), static_joint_modes=True)
+    r, omega = red.n_reduced, red.omega
+    return dataclasses.replace(red, M=np.eye(r), K=np.diag(omega ** 2),
+                               C=np.diag(2.0 * zeta * omega))
 
 
 def full_model(system: JointedSystem) -> ReducedModel:

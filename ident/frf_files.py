@@ -37,8 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError
+from ident.poles import QUANTITIES
 
-QUANTITIES = ("receptance", "mobility", "accelerance")
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
 _UFF_ORDINATE_CODE = {v: k for k, v in _UFF_ORDINATE.items()}
 _DIRS = {1: "+X", 2: "+Y", 3: "+Z", 4: "+RX", 5: "+RY", 6: "+RZ",

@@ -1,147 +1,53 @@
 """Measured amplitude-dependent modal data: the CSV reader and writer.
 
-Format (``shared/spec/measured-data.md``): plain comma-separated text, one header
-line, one row per excitation level and mode, no comment lines. Columns, in any order:
-
-=====================  ========  ==========================================================
-column                 required  meaning
-=====================  ========  ==========================================================
-``level``              yes       1-based integer; increases with excitation
-``excitation``         yes       excitation amplitude, any unit proportional to force (> 0)
-``omega2``             yes       undamped natural frequency squared, rad^2/s^2 (> 0)
-``zeta``               yes       damping ratio as a fraction, in (0, 1)
-``mode``               no        integer mode label (default 1)
-``response_amplitude`` no        response amplitude at resonance, any consistent unit (> 0)
-``run_order``          no        integer chronological order (default = ``level``)
-``x_*``                no        free user annotations, kept and otherwise ignored
-=====================  ========  ==========================================================
+Format: ``shared/spec/measured-data.md`` (one header line, one row per level and mode,
+no comment lines). Required columns ``level`` (1-based), ``excitation`` (> 0, any unit
+proportional to force), ``omega2`` (rad^2/s^2, > 0), ``zeta`` (fraction in (0, 1));
+optional ``mode`` (default 1), ``response_amplitude`` (> 0), ``run_order`` (default
+``level``), ``omega2_std``/``zeta_std`` (> 0), ``control`` (``force``/``response``),
+and free ``x_*`` annotations (kept, otherwise ignored).
 
 Every violated rule raises :class:`ident.errors.InputError` with one line
-``FILE:LINE:COLUMN: message``, where ``LINE`` is the 1-based line number in the file
-(the header is line 1, the first data row line 2) and ``COLUMN`` is the column *name*
-as written in the header (for a rule about a whole row, the column the rule is about:
-``level`` for a duplicate (mode, level), ``excitation`` for a non-increasing
-excitation, ``mode`` for too few levels). Entirely blank lines are skipped (their line
-numbers still count). Beyond the spec the reader also rejects: an empty file, a
-duplicated or empty header name, a row whose field count differs from the header, a
-non-integer or < 1 ``level``, a non-integer ``mode`` or ``run_order``, and a
-``response_amplitude`` <= 0.
+``FILE:LINE:COLUMN: message`` (LINE 1-based, the header is line 1; COLUMN the column
+name, for a rule about a whole row the column the rule is about: ``level`` for a
+duplicate (mode, level), ``excitation`` for a non-increasing excitation, ``mode`` for
+too few levels). Blank lines are skipped. Beyond the spec the reader also rejects an
+empty file, duplicated or empty header names, rows whose field count differs from the
+header, a non-integer or < 1 ``level``, non-integer ``mode``/``run_order``, and a mode
+whose rows mix both controls.
 
-Warnings (kept in :attr:`MeasuredData.warnings`, never raised): a ``zeta`` column whose
-median exceeds 0.2 (looks like percent) and, per mode, excitation ratios between
-successive levels that differ from their median by more than 5 %.
+Response control (``control = response``): each level held a constant response
+amplitude, so ``response_amplitude`` is required and must increase with ``level``; the
+``excitation`` (force needed at resonance) need not increase. Under force control the
+excitation must increase with ``level``.
 
-Run ``python -m ident.measured FILE`` to validate a file: it prints a summary and the
-warnings, or one error line on stderr with exit status 2.
+Warnings (kept in :attr:`MeasuredData.warnings`): a ``zeta`` median above 0.2 (percent?)
+and, per mode, ratios of the held amplitude between successive levels that differ from
+their median by more than 5 %.
+
+``python -m ident.measured FILE`` validates a file: a summary and the warnings, or one
+error line on stderr with exit status 2.
 """
 from __future__ import annotations
 
 import csv
 import math
 import sys
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from ident.errors import InputError
+from ident.modal_data import MeasuredData
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
-OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order")
+OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order", "omega2_std", "zeta_std",
+                    "control")
+CONTROLS = ("force", "response")
 KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_LEVELS = 4
 PERCENT_ZETA_MEDIAN = 0.2
 RATIO_TOLERANCE = 0.05
-
-
-@dataclass
-class MeasuredData:
-    """Amplitude-dependent modal data, one entry per (mode, level), in file order.
-
-    Attributes
-    ----------
-    level, mode, run_order : ndarray of int
-    excitation : ndarray of float
-        Excitation amplitude (unit proportional to force).
-    omega2 : ndarray of float
-        Undamped natural frequency squared, rad^2/s^2.
-    zeta : ndarray of float
-        Damping ratio (fraction).
-    response_amplitude : ndarray of float or None
-        Response amplitude at resonance, or None if the file has no such column.
-    extra : dict[str, ndarray]
-        ``x_*`` annotation columns: float arrays where every value is numeric, else
-        str arrays.
-    warnings : list[str]
-        Non-fatal findings (percent-looking zeta, non-constant excitation ratios).
-    line : ndarray of int
-        1-based line number of each entry in the source file (0 if not from a file).
-    source : str
-        The file name the data came from ("" if built in memory).
-    """
-
-    level: np.ndarray
-    excitation: np.ndarray
-    omega2: np.ndarray
-    zeta: np.ndarray
-    mode: np.ndarray
-    run_order: np.ndarray
-    response_amplitude: np.ndarray | None = None
-    extra: dict = field(default_factory=dict)
-    warnings: list = field(default_factory=list)
-    line: np.ndarray | None = None
-    source: str = ""
-
-    def __post_init__(self):
-        self.level = np.asarray(self.level, dtype=int)
-        n = self.level.size
-        self.excitation = np.asarray(self.excitation, dtype=float)
-        self.omega2 = np.asarray(self.omega2, dtype=float)
-        self.zeta = np.asarray(self.zeta, dtype=float)
-        self.mode = np.asarray(self.mode, dtype=int) if self.mode is not None else np.ones(n, int)
-        self.run_order = (np.asarray(self.run_order, dtype=int)
-                          if self.run_order is not None else self.level.copy())
-        if self.response_amplitude is not None:
-            self.response_amplitude = np.asarray(self.response_amplitude, dtype=float)
-        self.line = np.zeros(n, int) if self.line is None else np.asarray(self.line, dtype=int)
-        self.extra = {k: np.asarray(v) for k, v in self.extra.items()}
-        arrays = [self.excitation, self.omega2, self.zeta, self.mode, self.run_order,
-                  self.line, *self.extra.values()]
-        if self.response_amplitude is not None:
-            arrays.append(self.response_amplitude)
-        if any(a.shape != (n,) for a in arrays):
-            raise ValueError("MeasuredData: all columns must be 1-D arrays of equal length")
-
-    def __len__(self) -> int:
-        return int(self.level.size)
-
-    @property
-    def modes(self) -> np.ndarray:
-        """Sorted distinct mode labels."""
-        return np.unique(self.mode)
-
-    @property
-    def omega_hz(self) -> np.ndarray:
-        """Undamped natural frequency sqrt(omega2)/(2 pi), Hz."""
-        return np.sqrt(self.omega2) / (2.0 * np.pi)
-
-    def take(self, index) -> "MeasuredData":
-        """Entries selected by an index or boolean mask (warnings are kept)."""
-        index = np.asarray(index)
-        ra = None if self.response_amplitude is None else self.response_amplitude[index]
-        return replace(
-            self, level=self.level[index], excitation=self.excitation[index],
-            omega2=self.omega2[index], zeta=self.zeta[index], mode=self.mode[index],
-            run_order=self.run_order[index], response_amplitude=ra,
-            extra={k: v[index] for k, v in self.extra.items()}, line=self.line[index],
-            warnings=list(self.warnings))
-
-    def for_mode(self, m: int) -> "MeasuredData":
-        """Entries of mode ``m`` sorted by level; ValueError if the mode is absent."""
-        idx = np.flatnonzero(self.mode == int(m))
-        if idx.size == 0:
-            raise ValueError(f"mode {m} not in data (modes: {', '.join(map(str, self.modes))})")
-        return self.take(idx[np.argsort(self.level[idx], kind="stable")])
 
 
 def _fail(source: str, line: int, column: str, message: str) -> None:
@@ -251,6 +157,12 @@ def read_measured(path) -> MeasuredData:
     mode = ints("mode") if "mode" in col else np.ones(n, int)
     run_order = ints("run_order") if "run_order" in col else level.copy()
     response = floats("response_amplitude") if "response_amplitude" in col else None
+    omega2_std = floats("omega2_std") if "omega2_std" in col else None
+    zeta_std = floats("zeta_std") if "zeta_std" in col else None
+    if "control" in col:
+        control = np.array([f[col["control"]].lower() for _, f in rows], dtype=str)
+    else:
+        control = np.full(n, "force")
 
     def first_bad(mask, name, message):
         bad = np.flatnonzero(mask)
@@ -268,6 +180,15 @@ def read_measured(path) -> MeasuredData:
     if response is not None:
         first_bad(response <= 0, "response_amplitude",
                   lambda i: f"response_amplitude must be > 0, got {response[i]:g}")
+    for name, std in (("omega2_std", omega2_std), ("zeta_std", zeta_std)):
+        if std is not None:
+            first_bad(std <= 0, name, lambda i: f"{name} must be > 0, got {std[i]:g}")
+    first_bad(~np.isin(control, CONTROLS), "control",
+              lambda i: f"control must be force or response, got {control[i]!r}")
+    if response is None:
+        first_bad(control == "response", "response_amplitude",
+                  lambda i: "control = response needs a response_amplitude column (the "
+                            "amplitude each level held)")
 
     # Duplicate (mode, level): report the second occurrence in file order.
     key = np.stack([mode, level], axis=1)
@@ -283,18 +204,23 @@ def read_measured(path) -> MeasuredData:
         if idx.size < MIN_LEVELS:
             _fail(source, lines[idx].min(), "mode",
                   f"mode {m} has {idx.size} levels, at least {MIN_LEVELS} are needed")
-        e = excitation[idx]
+        controls = np.unique(control[idx])
+        if controls.size > 1:
+            _fail(source, lines[idx].min(), "control",
+                  f"mode {m} mixes control = force and response; one series has one control")
+        name = "response_amplitude" if controls[0] == "response" else "excitation"
+        e = response[idx] if name == "response_amplitude" else excitation[idx]
         bad = np.flatnonzero(np.diff(e) <= 0)
         if bad.size:
             i, j = idx[bad[0]], idx[bad[0] + 1]
-            _fail(source, lines[j], "excitation",
-                  f"mode {m}: excitation of level {level[j]} ({excitation[j]:g}) does not "
-                  f"exceed that of level {level[i]} ({excitation[i]:g})")
+            _fail(source, lines[j], name,
+                  f"mode {m}: {name} of level {level[j]} ({e[bad[0] + 1]:g}) does not "
+                  f"exceed that of level {level[i]} ({e[bad[0]]:g})")
         ratio = e[1:] / e[:-1]
         median = np.median(ratio)
         if np.any(np.abs(ratio / median - 1.0) > RATIO_TOLERANCE):
             warnings.append(
-                f"{source}: mode {m}: excitation ratios between successive levels are not "
+                f"{source}: mode {m}: {name} ratios between successive levels are not "
                 f"constant ({ratio.min():.3g} to {ratio.max():.3g}, median {median:.3g})")
     if np.median(zeta) > PERCENT_ZETA_MEDIAN:
         warnings.insert(0, f"{source}: zeta median {np.median(zeta):.3g} > "
@@ -311,6 +237,7 @@ def read_measured(path) -> MeasuredData:
 
     return MeasuredData(level=level, excitation=excitation, omega2=omega2, zeta=zeta,
                         mode=mode, run_order=run_order, response_amplitude=response,
+                        omega2_std=omega2_std, zeta_std=zeta_std, control=control,
                         extra=extra, warnings=warnings, line=lines, source=source)
 
 
@@ -318,6 +245,7 @@ def write_measured(path, data: MeasuredData) -> None:
     """Write ``data`` as a measured-data CSV file (round-trips through read_measured).
 
     Columns: level, excitation, omega2, zeta, mode, [response_amplitude,] run_order,
+    [omega2_std, zeta_std,] [control (only when some entry is response-controlled),]
     then the ``x_*`` annotations; floats with 17 significant digits (exact).
     """
     names = ["level", "excitation", "omega2", "zeta", "mode"]
@@ -327,6 +255,13 @@ def write_measured(path, data: MeasuredData) -> None:
         cols.append(data.response_amplitude)
     names.append("run_order")
     cols.append(data.run_order)
+    for name in ("omega2_std", "zeta_std"):
+        if getattr(data, name) is not None:
+            names.append(name)
+            cols.append(getattr(data, name))
+    if np.any(data.control != "force"):
+        names.append("control")
+        cols.append(data.control)
     for k, v in data.extra.items():
         if not k.startswith("x_"):
             raise ValueError(f"extra column {k!r} must start with 'x_'")

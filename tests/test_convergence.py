@@ -4,8 +4,9 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
-from cases.convergence import cantilever_beta_l, cantilever_study, double_beam_study
+from cases.convergence import cantilever_beta_l, cantilever_study, double_beam_study, joint_spacing
 
 
 def test_cantilever_roots_solve_the_frequency_equation():
@@ -38,6 +39,19 @@ def test_double_beam_mesh_choice_is_converged():
     assert abs(default["glue_slip_error_estimate"]) < 1e-2
     es = d["element_size_sweep"]["frequency_relative_change"]
     assert abs(es[0]) > abs(es[1]) > 0
+
+
+@pytest.mark.parametrize("n_joints", [2, 5, 33])
+def test_joint_spacing_is_the_glued_zone_mesh(n_joints):
+    """The joint spacing of the refinement plots is the element length the double-beam
+    mesh puts between its glued-zone nodes (the last ``n_joints`` nodes)."""
+    from dataclasses import replace
+
+    from cases.double_beam.model import DoubleBeamConfig, build_mesh
+
+    mesh = build_mesh(replace(DoubleBeamConfig(), n_joints=n_joints))
+    np.testing.assert_allclose(np.diff(mesh.x[-n_joints:]), joint_spacing([n_joints])[0],
+                               rtol=1e-12)
 
 
 def test_cli_convergence_json_and_plot(tmp_path, capsys):

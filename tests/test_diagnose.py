@@ -8,7 +8,8 @@ import pytest
 from scipy import integrate
 
 from cli.main import main
-from inverse.diagnose import CANDIDATES, diagnose, slip_shapes, tie_ratio
+from inverse.diagnose import CANDIDATES, diagnose
+from inverse.diagnosis_models import slip_shapes, tie_ratio
 from ident.measured import write_measured
 from cases.synthetic import generate_case
 from joints.describing import describing_function

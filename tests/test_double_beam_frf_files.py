@@ -1,4 +1,4 @@
-"""FRF files of the simulated double-beam campaign (cases.double_beam.study.
+"""FRF files of the simulated double-beam campaign (cases.double_beam.files.
 write_frf_files) through ``iwanfe identify``.
 
 Truths: the campaign's own receptance (exact CSV round trip), the study's identification
@@ -7,7 +7,9 @@ of the same FRFs (simulated_measured.csv), and the drive voltages of the measure
 import numpy as np
 import pytest
 
-import cases.double_beam.study as dbr
+from cases.double_beam.files import write_report
+from cases.double_beam.settings import DoubleBeamStudy
+from cases.double_beam.study import run_study
 from cli.main import main
 from ident.frf_files import read_frf
 from ident.identify import identify_modes
@@ -19,8 +21,8 @@ COARSE = dict(df_hz=1.0, band_hz=(236.0, 268.0), sliders_per_octave=8, weak_join
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
     out = tmp_path_factory.mktemp("double-beam")
-    rep = dbr.run_study(dbr.DoubleBeamStudy(**COARSE), progress=False)
-    dbr.write_report(rep, out)
+    rep = run_study(DoubleBeamStudy(**COARSE), progress=False)
+    write_report(rep, out)
     return rep, out
 
 

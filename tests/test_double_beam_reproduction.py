@@ -1,32 +1,33 @@
-"""The double-beam reproduction (cases.double_beam.study) and
+"""The double-beam reproduction (cases.double_beam.study and its modules) and
 ``iwanfe reproduce double-beam``.
 
 Coarse studies (1 Hz lines, 8 sliders per octave) keep the file fast; the full run is
-the command's job. Truths used: the exact four-parameter Iwan describing function
-(joints.iwan), fe.reduction.reduced_basis and a sparse static solve, the full FE
-model's modal FRF (fe.modal.frf_modal), the decoupled modal joint damping of paper eq.
-30-32 with the simulated slips, the exact scaling law of the Iwan density under a
-change of force scale, and the input chi of the simulation.
+the command's job. Truths used: a sparse static solve, the full FE model's modal FRF
+(fe.modal.frf_modal), the decoupled modal joint damping of paper eq. 30-32 with the
+simulated slips, the exact scaling law of the Iwan density under a change of force
+scale, the planted (input) chi of the simulation, the estimator called directly, and
+one golden value (tests/golden/double_beam_estimates.json, its note says where it
+comes from).
 """
-import dataclasses
 import json
-import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-import cases.double_beam.study as dbr
 import runs.stepped_sine as stepped_sine
-from cli.main import main
+from cases.double_beam.joint_setup import joint_setup, nonlinear_model, phi_max_of
 from cases.double_beam.model import build_double_beam
-from ident.measured import read_measured
-from fe.aft import aft_joint_force
+from cases.double_beam.settings import DoubleBeamStudy, measured_levels
+from cases.double_beam.study import run_study
+from cli.main import main
 from fe.modal import frf_modal, normal_modes
-from fe.reduction import JointBank, JointedSystem, reduced_basis
-from joints.describing import describing_function
-from joints.iwan import IwanParameters
+from ident.measured import read_measured
+from inverse.estimate import estimate
+
+GOLDEN = Path(__file__).resolve().parent / "golden" / "double_beam_estimates.json"
 
 COARSE = dict(df_hz=1.0, band_hz=(236.0, 268.0), sliders_per_octave=8, weak_joint_scales=())
 
@@ -39,49 +40,15 @@ def model():
 @pytest.fixture(scope="module")
 def source(model):
     """The estimate-driven joint of the coarse study (chi, R from measured levels 1-7)."""
-    st = dbr.DoubleBeamStudy(**COARSE)
-    return dbr.joint_setup(model, dbr.measured_levels(st), st)
+    st = DoubleBeamStudy(**COARSE)
+    return joint_setup(model, measured_levels(st), st)
 
 
 @pytest.fixture(scope="module")
 def weak(model, source):
     """Coarse run with R / 100: the glue stays nearly stuck (top slip 6e-4 phi_max)."""
-    st = dbr.DoubleBeamStudy(**COARSE, chi=source.chi, R=0.01 * source.R)
-    return dbr.run_study(st, progress=False, model=model)
-
-
-# --------------------------------------------------------------------------- joints
-
-
-@pytest.mark.parametrize("chi, beta", [(-0.38, 0.0), (-0.7, 0.0), (-0.2, 1.5)])
-def test_log_spaced_bank_matches_exact_describing_function(chi, beta):
-    """First-harmonic stiffness and dissipation of the bank (AFT march over one sampled
-    period) against the exact continuous model, 1e-3 phi_max to 2 phi_max."""
-    p = IwanParameters(chi=chi, K_T=2.5e7, F_S=20.0, beta=beta)
-    a_low = 1e-3 * p.phi_max / 64
-    bank = dbr.log_spaced_bank([p, p], a_low, 16)
-    np.testing.assert_allclose(bank.K_T, p.K_T, rtol=1e-12)
-    N = 2048
-    theta = 2 * np.pi * np.arange(N) / N
-    for A in p.phi_max * np.concatenate([np.logspace(-3, 0, 13), [2.0]]):
-        s = np.tile(A * np.sin(theta), (2, 1))
-        F, _ = aft_joint_force(s, bank)
-        k_in = 2.0 / N * F[0] @ np.sin(theta) / A
-        k_q = 2.0 / N * F[0] @ np.cos(theta) / A
-        e_in, e_q = describing_function(p, A)
-        # in-phase: relative to the stiffness lost by slipping; quadrature: relative
-        assert abs(k_in - e_in) <= 1.5e-3 * (p.K_T - e_in), (A / p.phi_max, k_in, e_in)
-        assert abs(k_q - e_q) <= 1.5e-3 * e_q, (A / p.phi_max, k_q, e_q)
-        np.testing.assert_allclose(F[1], F[0], rtol=0, atol=0)
-
-
-def test_log_spaced_bank_rejects_bad_input():
-    p = IwanParameters(chi=-0.5, K_T=1e6, F_S=10.0, beta=0.0)
-    q = IwanParameters(chi=-0.4, K_T=1e6, F_S=10.0, beta=0.0)
-    with pytest.raises(ValueError, match="same phi_max"):
-        dbr.log_spaced_bank([p, q], 1e-9, 8)
-    with pytest.raises(ValueError, match="a_low"):
-        dbr.log_spaced_bank([p], 2 * p.phi_max, 8)
+    st = DoubleBeamStudy(**COARSE, chi=source.chi, R=0.01 * source.R)
+    return run_study(st, progress=False, model=model)
 
 
 # --------------------------------------------------------------------------- model
@@ -95,21 +62,21 @@ def test_modes_are_deterministic_and_agree_with_arpack(model):
     np.testing.assert_allclose(w1, w3, rtol=2e-6)
 
 
-def test_ritz_basis_equals_reduced_basis_and_holds_the_static_joint_compliance(model):
-    zeta = 0.0127
-    red = dbr.ritz_basis(model, 12, zeta)
-    n = model.M.shape[0]
-    system = JointedSystem(M=model.M, K=model.K_without_joints, C=sp.csr_matrix((n, n)),
-                           G=model.slip_matrix, K_T=model.joint_stiffness)
-    ref = reduced_basis(system, n_modes=12, static_joint_modes=True)
-    np.testing.assert_allclose(red.omega, ref.omega, rtol=2e-6)
+def test_nonlinear_model_holds_the_static_joint_compliance_of_the_fe_model(model, source):
+    """The reduced double beam (stuck-glue modes + static joint modes, modal damping
+    zeta_v) reproduces the joints' static compliance ``G K^-1 G^T`` of the full FE model
+    (sparse direct solve), and its banks rebuild each joint's stuck stiffness."""
+    st = DoubleBeamStudy(df_hz=1.0, band_hz=(236.0, 268.0), sliders_per_octave=8,
+                         weak_joint_scales=(), n_modes=12)
+    red, bank = nonlinear_model(model, source, st)
     np.testing.assert_allclose(red.basis.T @ (model.M @ red.basis), np.eye(red.n_reduced),
                                atol=1e-10)
-    np.testing.assert_allclose(np.diag(red.C), 2 * zeta * red.omega, rtol=1e-14)
+    np.testing.assert_allclose(np.diag(red.C), 2 * source.zeta_viscous * red.omega, rtol=1e-14)
     G = model.slip_matrix.toarray()
     static = G @ spla.splu(sp.csc_matrix(model.K)).solve(G.T.copy())
     reduced = red.G @ np.diag(1.0 / red.omega ** 2) @ red.G.T
     np.testing.assert_allclose(reduced, static, rtol=1e-8)
+    np.testing.assert_allclose(bank.K_T, model.joint_stiffness, rtol=1e-12)
 
 
 def test_phi_max_is_largest_at_beta_zero_and_joints_share_K_T(model, source):
@@ -120,7 +87,7 @@ def test_phi_max_is_largest_at_beta_zero_and_joints_share_K_T(model, source):
     np.testing.assert_allclose([p.phi_max for p in source.params], source.phi_max, rtol=1e-12)
     np.testing.assert_allclose(sum(p.R for p in source.params), source.R, rtol=1e-12)
     for beta in (0.5, 4.0):
-        assert dbr.phi_max_of(source.K_T, source.R, source.chi, beta) < source.phi_max
+        assert phi_max_of(source.K_T, source.R, source.chi, beta) < source.phi_max
 
 
 # --------------------------------------------------------------------------- simulation
@@ -168,8 +135,8 @@ def test_estimator_recovers_the_input_chi_from_a_weak_joint(weak):
 def test_force_scale_changes_R_and_phi_max_but_not_the_simulated_modal_data(model):
     """R~ ~ s^-(chi+1), phi_max ~ s; omega2, zeta identical; slips ~ s (exact scaling of
     the Iwan density and of the log-spaced bank)."""
-    a = dbr.run_study(dbr.DoubleBeamStudy(**COARSE, n_levels=7), progress=False, model=model)
-    b = dbr.run_study(dbr.DoubleBeamStudy(**COARSE, n_levels=7, force_scale=10.0),
+    a = run_study(DoubleBeamStudy(**COARSE, n_levels=7), progress=False, model=model)
+    b = run_study(DoubleBeamStudy(**COARSE, n_levels=7, force_scale=10.0),
                       progress=False, model=model)
     chi = a.setup.chi
     assert b.setup.chi == chi
@@ -187,8 +154,8 @@ class Stop(Exception):
 
 
 def test_interrupted_run_resumes_without_recomputing(model, tmp_path, monkeypatch):
-    st = dbr.DoubleBeamStudy(**COARSE, n_levels=8)
-    ref = dbr.run_study(st, store=tmp_path / "ref", progress=False, model=model)
+    st = DoubleBeamStudy(**COARSE, n_levels=8)
+    ref = run_study(st, store=tmp_path / "ref", progress=False, model=model)
     assert ref.campaign.computed.all()
     real = stepped_sine.run_level
     done = []
@@ -201,13 +168,13 @@ def test_interrupted_run_resumes_without_recomputing(model, tmp_path, monkeypatc
 
     monkeypatch.setattr(stepped_sine, "run_level", stop_at_level_3)
     with pytest.raises(Stop):
-        dbr.run_study(st, store=tmp_path / "b", progress=False, model=model)
+        run_study(st, store=tmp_path / "b", progress=False, model=model)
     monkeypatch.setattr(stepped_sine, "run_level", real)
-    again = dbr.run_study(st, store=tmp_path / "b", progress=False, model=model)
+    again = run_study(st, store=tmp_path / "b", progress=False, model=model)
     assert done == [0, 1, 2]
     assert list(np.flatnonzero(again.campaign.computed)) == list(range(3, 8))
     assert np.array_equal(again.campaign.receptance, ref.campaign.receptance)
-    third = dbr.run_study(st, store=tmp_path / "b", progress=False, model=model)
+    third = run_study(st, store=tmp_path / "b", progress=False, model=model)
     assert not third.campaign.computed.any()
     assert np.array_equal(third.simulated.zeta, ref.simulated.zeta)
 
@@ -232,8 +199,16 @@ def test_cli_json_holds_the_estimates_and_the_simulation(tmp_path, capsys):
             for key in ("delta_omega2", "delta_zeta", "measured_delta_omega2",
                         "measured_delta_zeta"):
                 assert isinstance(p[key], float), (method, key)
-    # the paper method on the shipped data: cases/data/README.md
-    assert abs(d["methods"]["paper"]["chi"] - (-0.37708)) < 1e-4
+    # the report carries the estimator's own result on the measured levels 1-7 ...
+    direct = estimate(measured_levels(DoubleBeamStudy()), fit_levels=list(range(1, 8)),
+                      method="paper", model=build_double_beam(), force_scale=1.0)
+    assert d["methods"]["paper"]["chi"] == direct.chi
+    assert d["methods"]["paper"]["kappa1_B"] == direct.kappa1_B
+    # ... whose value on the shipped data has no independent truth (the paper prints
+    # -0.37366 with an unstated variant, cases/data/README.md): a golden value only;
+    # the estimator's recovery of a planted chi is test_estimator_recovers_the_input_chi...
+    golden = json.loads(GOLDEN.read_text())["paper_method_levels_1_7"]
+    assert abs(d["methods"]["paper"]["chi"] - golden["chi"]) < golden["tolerance"]
     assert len(d["simulated"]["omega2"]) == 10 and len(d["simulated"]["zeta"]) == 10
     assert d["assumptions"]["beta"] == 0.0 and d["assumptions"]["force_scale_N_per_V"] == 1.0
     sim = read_measured(out / "simulated_measured.csv")

@@ -1,4 +1,5 @@
-"""Estimator of chi, |kappa1|B, B~, R~ and predictions (cases/estimate.py)."""
+"""Estimator of chi, |kappa1|B, B~, R~ and predictions (inverse/estimate.py and the
+modules it calls: iwan_modal, power_law, level_predictions, fe_reference)."""
 from __future__ import annotations
 
 import json
@@ -12,14 +13,11 @@ from scipy.optimize import brentq, minimize_scalar
 
 from cli import main as cli
 from ident.errors import InputError
-from inverse.estimate import (
-    estimate,
-    fit_damping_growth,
-    joint_slip_at_resonance,
-    kappa_ratio,
-    parse_levels,
-    zeta_with_joint,
-)
+from cases.registry import build_case
+from inverse.estimate import estimate, parse_levels
+from inverse.fe_reference import joint_slip_at_resonance
+from inverse.iwan_modal import kappa_ratio, zeta_with_joint
+from inverse.power_law import fit_damping_growth
 from ident.measured import MeasuredData, read_measured
 from cases.paper_data import DATA_FILE, PUBLISHED
 from joints.describing import describing_function, kappa1, kappa2_exact
@@ -308,22 +306,37 @@ def test_r_recovered_through_fe_model():
 def test_r_scales_with_force_scale_double_beam():
     """R~ ~ force_scale^-(chi+1) (B~ ~ A^(chi+1), A linear in the force)."""
     data = read_measured(DATA_FILE)
-    e1 = estimate(data, "1-7", "paper", case="double-beam", force_scale=1.0)
-    e2 = estimate(data, "1-7", "paper", case="double-beam", force_scale=40.0)
+    model = build_case("double-beam")
+    e1 = estimate(data, "1-7", "paper", model=model, force_scale=1.0)
+    e2 = estimate(data, "1-7", "paper", model=model, force_scale=40.0)
     # (eigsh shapes are accurate to ~1e-8)
     assert e2.R / e1.R == pytest.approx(40.0 ** -(e1.chi + 1), rel=1e-6)
     assert e2.B / e1.B == pytest.approx(40.0 ** (e1.chi + 1), rel=1e-6)
     assert e1.case.fe_frequency_hz == pytest.approx(math.sqrt(data.omega2[0]) / (2 * math.pi),
                                                     rel=0.02)
     # slip amplitudes vs the one-mode approximation |g.phi| |phi_d| F / (2 zeta omega^2)
-    from cases.double_beam.model import build_double_beam
-    model = build_double_beam()
     w, phi = model.modes(e1.case.fe_mode)
     l = e1.case.fe_mode - 1
     g_phi = np.abs(model.slip_matrix @ phi[:, l])
     one_mode = g_phi * abs(phi[model.drive_dof, l]) * e1.case.reference_force / (
         2 * data.zeta[0] * w[l] ** 2)
     np.testing.assert_allclose(e1.case.slip_amplitudes, one_mode, rtol=0.01)
+
+
+def test_cli_case_resolves_through_the_registry(capsys):
+    """``--case NAME`` gives the estimate of the registry's model, labelled NAME; no
+    model leaves B and R null."""
+    code, out, err = run_cli(["estimate", str(DATA_FILE), "--fit-levels", "1-7",
+                              "--case", "double-beam", "--json"], capsys)
+    assert code == 0, err
+    res = json.loads(out)
+    data = read_measured(DATA_FILE)
+    lib = estimate(data, "1-7", "paper", model=build_case("double-beam"))
+    assert res["case"]["name"] == "double-beam" and lib.case.name == "model"
+    assert res["R"] == pytest.approx(lib.R, rel=1e-12)
+    assert res["case"]["fe_mode"] == lib.case.fe_mode
+    bare = estimate(data, "1-7", "paper")
+    assert bare.B is None and bare.R is None and bare.case is None
 
 
 def test_joint_slip_solver_matches_dense_solve():

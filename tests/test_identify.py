@@ -16,8 +16,10 @@ import pytest
 
 from cli.main import main
 from ident.frf_files import FRFSet, write_frf
-from ident.identify import identify, identify_modes, mac, match_modes, modal_data_from_levels
+from ident.identify import identify, identify_modes
 from ident.measured import read_measured
+from ident.poles import mac
+from ident.tracking import match_modes, modal_data_from_levels
 
 FREQ = np.arange(20.0, 500.0 + 1e-9, 0.5)        # 0.5 Hz lines
 

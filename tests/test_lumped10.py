@@ -1,4 +1,4 @@
-"""The paper's 10-DOF study (cases.lumped10.model) and ``iwanfe reproduce lumped``."""
+"""The paper's 10-DOF study (cases.lumped10) and ``iwanfe reproduce lumped``."""
 import csv
 import json
 from pathlib import Path
@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 import scipy.linalg as la
 
+from cases.lumped10.improved_fit import fit_improved
+from cases.lumped10.model import LumpedParameters, force_vector, lumped10_system, mode_topology
+from cases.lumped10.report import TABLE1_TEXT, TABLE2_TEXT, paper_table
 from cli.main import main
-from cases.lumped10.model import (TABLE1_TEXT, TABLE2_TEXT, LumpedParameters, fit_improved,
-                            force_vector, lumped10_system, mode_topology, paper_table)
-from fe.modal import normal_modes
+from fe.modal import modal_inverse_receptance, normal_modes
 from joints.describing import describing_function
 from joints.iwan import IwanParameters
 
@@ -58,6 +59,22 @@ def test_transcribed_tables_equal_shared_files():
         ours = paper_table(text)
         for key in rows[0]:
             np.testing.assert_allclose(ours[key], [float(r[key]) for r in rows])
+
+
+def test_modal_filter_of_linear_model_is_one_mode():
+    """Linear 10-DOF model (stuck joints, proportional damping): the modal filter of the
+    direct solution of ``(K_J - w^2 M + i w C) x = f`` is the single-mode inverse
+    receptance ``w_n^2 - w^2 + i w (a + b w_n^2)`` in closed form (paper eq. 40)."""
+    p = LumpedParameters()
+    s = lumped10_system(p)
+    omega_n, shapes = normal_modes(s.K_J, s.M, 10)
+    load = force_vector(p)
+    w = 2 * np.pi * np.arange(40.0, 320.0, 7.3)
+    x = np.array([np.linalg.solve(s.K_J - wi ** 2 * s.M + 1j * wi * s.C, load) for wi in w])
+    for n in (0, 1, 5):
+        D = modal_inverse_receptance(x, shapes[:, n], s.M, load)
+        exact = omega_n[n] ** 2 - w ** 2 + 1j * w * (p.a + p.b * omega_n[n] ** 2)
+        np.testing.assert_allclose(D, exact, rtol=1e-9, atol=1e-9 * omega_n[n] ** 2)
 
 
 def test_improved_fit_recovers_hidden_parameters():

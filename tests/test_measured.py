@@ -210,3 +210,42 @@ def test_module_entry_point(tmp_path):
     assert r.stderr.startswith(f"error: {bad}:3:zeta: zeta must be a fraction")
     r = _run_module(tmp_path / "does_not_exist.csv")
     assert r.returncode == 2 and r.stderr.count("\n") == 1
+
+
+RESPONSE = ("level,excitation,omega2,zeta,response_amplitude,control,omega2_std,zeta_std\n"
+            "1,3.0,1e5,0.010,1e-3,response,2.0,1e-5\n"
+            "2,2.0,1e5,0.011,2e-3,response,2.0,1e-5\n"
+            "3,2.5,1e5,0.012,4e-3,response,2.0,1e-5\n"
+            "4,3.0,1e5,0.013,8e-3,response,2.0,1e-5\n")
+
+
+def test_response_control_holds_the_response_amplitude(tmp_path):
+    """Spec: under response control the excitation need not increase; the held
+    amplitude (the abscissa) is the response amplitude, and the stds round-trip."""
+    data = read_measured(write(tmp_path, RESPONSE))
+    assert data.response_controlled
+    np.testing.assert_array_equal(data.held_amplitude, [1e-3, 2e-3, 4e-3, 8e-3])
+    np.testing.assert_array_equal(data.zeta_std, 1e-5)
+    write_measured(tmp_path / "b.csv", data)
+    back = read_measured(tmp_path / "b.csv")
+    for name in ("omega2_std", "zeta_std", "response_amplitude", "excitation"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(data, name))
+    assert back.response_controlled
+    # a force-controlled file holds its excitation
+    assert not read_measured(good(tmp_path)).response_controlled
+
+
+@pytest.mark.parametrize("edit, column, message", [
+    (lambda t: t.replace(",response_amplitude", "").replace(",1e-3,", ",").replace(",2e-3,", ",")
+     .replace(",4e-3,", ",").replace(",8e-3,", ","), "response_amplitude", "needs a response"),
+    (lambda t: t.replace("4,3.0,1e5,0.013,8e-3", "4,3.0,1e5,0.013,3e-3"), "response_amplitude",
+     "does not exceed"),
+    (lambda t: t.replace("2,2.0,1e5,0.011,2e-3,response", "2,2.0,1e5,0.011,2e-3,force"),
+     "control", "mixes"),
+    (lambda t: t.replace("3,2.5,1e5,0.012,4e-3,response", "3,2.5,1e5,0.012,4e-3,torque"),
+     "control", "force or response"),
+    (lambda t: t.replace("2.0,1e-5\n4", "0.0,1e-5\n4"), "omega2_std", "must be > 0"),
+])
+def test_response_control_rules(tmp_path, edit, column, message):
+    text = error_of(write(tmp_path, edit(RESPONSE)))
+    assert f":{column}:" in text and message in text, text

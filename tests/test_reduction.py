@@ -1,9 +1,12 @@
-"""Reduced bases of jointed structures (fe.reduction), checked against direct solutions."""
+"""Reduced bases of jointed structures and Jenkins banks (fe.reduction), checked against
+direct solutions and the exact four-parameter Iwan describing function."""
 import numpy as np
 import pytest
 import scipy.linalg as la
 
-from fe.reduction import JointBank, JointedSystem, rayleigh_damping, reduced_basis
+from fe.aft import aft_joint_force
+from fe.reduction import JointBank, JointedSystem, rayleigh_damping, reduced_basis, ritz_basis
+from joints.describing import describing_function
 from joints.iwan import IwanParameters
 
 
@@ -79,3 +82,53 @@ def test_joint_bank_energy_bookkeeping():
     assert bank.dissipated(anchor, new) == pytest.approx(np.sum(bank.stiffness * bank.slip_limit * moved))
     with pytest.raises(ValueError):
         JointBank(np.ones((2, 3)), np.ones((2, 4)))
+
+
+def test_ritz_basis_has_modal_damping_and_the_static_joint_compliance():
+    """Mass-orthonormal, K_J diagonal (projected here), C = diag(2 zeta omega), and the
+    static joint compliance of a direct solve."""
+    s = _chain()
+    zeta = 0.0127
+    red = ritz_basis(s, 3, zeta)
+    assert red.n_reduced == 5
+    np.testing.assert_allclose(red.basis.T @ s.M @ red.basis, np.eye(5), atol=1e-10)
+    np.testing.assert_allclose(red.basis.T @ s.K_J @ red.basis, np.diag(red.omega ** 2),
+                               rtol=1e-9, atol=1e-9 * red.omega.max() ** 2)
+    np.testing.assert_array_equal(red.M, np.eye(5))
+    np.testing.assert_array_equal(red.K, np.diag(red.omega ** 2))
+    np.testing.assert_allclose(np.diag(red.C), 2 * zeta * red.omega, rtol=1e-14)
+    assert np.count_nonzero(red.C - np.diag(np.diag(red.C))) == 0
+    exact = s.G @ np.linalg.solve(s.K_J, s.G.T)
+    reduced = red.G @ np.diag(1.0 / red.omega ** 2) @ red.G.T
+    np.testing.assert_allclose(reduced, exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())
+
+
+@pytest.mark.parametrize("chi, beta", [(-0.38, 0.0), (-0.7, 0.0), (-0.2, 1.5)])
+def test_log_spaced_bank_matches_exact_describing_function(chi, beta):
+    """First-harmonic stiffness and dissipation of the bank (AFT march over one sampled
+    period) against the exact continuous model, 1e-3 phi_max to 2 phi_max."""
+    p = IwanParameters(chi=chi, K_T=2.5e7, F_S=20.0, beta=beta)
+    a_low = 1e-3 * p.phi_max / 64
+    bank = JointBank.log_spaced([p, p], a_low, 16)
+    np.testing.assert_allclose(bank.K_T, p.K_T, rtol=1e-12)
+    N = 2048
+    theta = 2 * np.pi * np.arange(N) / N
+    for A in p.phi_max * np.concatenate([np.logspace(-3, 0, 13), [2.0]]):
+        s = np.tile(A * np.sin(theta), (2, 1))
+        F, _ = aft_joint_force(s, bank)
+        k_in = 2.0 / N * F[0] @ np.sin(theta) / A
+        k_q = 2.0 / N * F[0] @ np.cos(theta) / A
+        e_in, e_q = describing_function(p, A)
+        # in-phase: relative to the stiffness lost by slipping; quadrature: relative
+        assert abs(k_in - e_in) <= 1.5e-3 * (p.K_T - e_in), (A / p.phi_max, k_in, e_in)
+        assert abs(k_q - e_q) <= 1.5e-3 * e_q, (A / p.phi_max, k_q, e_q)
+        np.testing.assert_allclose(F[1], F[0], rtol=0, atol=0)
+
+
+def test_log_spaced_bank_rejects_bad_input():
+    p = IwanParameters(chi=-0.5, K_T=1e6, F_S=10.0, beta=0.0)
+    q = IwanParameters(chi=-0.4, K_T=1e6, F_S=10.0, beta=0.0)
+    with pytest.raises(ValueError, match="same phi_max"):
+        JointBank.log_spaced([p, q], 1e-9, 8)
+    with pytest.raises(ValueError, match="a_low"):
+        JointBank.log_spaced([p], 2 * p.phi_max, 8)

@@ -1,4 +1,5 @@
-"""Off-screen mode-shape renders (viz.render) and the ``iwanfe render`` command.
+"""Off-screen mode-shape renders (viz.slab, viz.offscreen, viz.render) and the
+``iwanfe render`` command.
 
 Geometry and kinematics are checked in-process against closed forms (no OpenGL needed).
 Every actual render runs in a child process: on a machine without working GL libraries
@@ -17,8 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from viz import render
-from viz.render import SlabGeometry, auto_scales, refine_hermite, slab_fields
+import cases.double_beam.model as db
+from fe.interface import StripGeometry
+from viz import offscreen, render
+from viz.slab import auto_scales, refine_hermite, slab_fields
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,7 +77,7 @@ def test_fibre_kinematics_show_slip_only_without_composite_action():
     x = np.linspace(0, 0.35, 8)
     theta = np.linspace(0.1, 0.4, 8)
     w = np.cumsum(theta) * 1e-3
-    lower, upper = SlabGeometry(x, -t / 2, t, b), SlabGeometry(x, t / 2, t, b)
+    lower, upper = StripGeometry(x, -t / 2, t, b), StripGeometry(x, t / 2, t, b)
 
     def interface_slip(u_low, u_up):
         fl = slab_fields(lower, dict(u=u_low, w=w, theta=theta))
@@ -95,7 +98,7 @@ def test_auto_scales_hit_their_targets():
     length, t = 0.35, 1e-3
     x = np.linspace(0, length, 11)
     w, th = cantilever_mode(x, length, 0)
-    strips = [SlabGeometry(x, -t / 2, t, 0.05), SlabGeometry(x, t / 2, t, 0.05)]
+    strips = [StripGeometry(x, -t / 2, t, 0.05), StripGeometry(x, t / 2, t, 0.05)]
     fields = [slab_fields(s, dict(u=0 * x, w=w, theta=th)) for s in strips]
     scale, t_scale = auto_scales(fields, deflection_fraction=0.1, min_height_fraction=0.08)
     assert t_scale == pytest.approx(0.08 * length / (2 * t))
@@ -103,7 +106,7 @@ def test_auto_scales_hit_their_targets():
     peak = np.hypot(t_scale * t / 2 * th[-1], w[-1])
     assert scale * peak == pytest.approx(0.1 * length)
     # a thick stack is not exaggerated
-    _, t1 = auto_scales([slab_fields(SlabGeometry(x, 0.0, 0.1, 0.05))])
+    _, t1 = auto_scales([slab_fields(StripGeometry(x, 0.0, 0.1, 0.05))])
     assert t1 == 1.0
 
 
@@ -111,22 +114,22 @@ def test_backend_selection(monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkOSOpenGLRenderWindow")
-    assert render.select_offscreen_backend() == "vtkOSOpenGLRenderWindow"  # user choice kept
+    assert offscreen.select_offscreen_backend() == "vtkOSOpenGLRenderWindow"  # user choice kept
     monkeypatch.delenv("VTK_DEFAULT_OPENGL_WINDOW")
-    monkeypatch.setattr(render, "_loadable", lambda *names: any("EGL" in n for n in names))
-    assert render.select_offscreen_backend() == "vtkEGLRenderWindow"
+    monkeypatch.setattr(offscreen, "_loadable", lambda *names: any("EGL" in n for n in names))
+    assert offscreen.select_offscreen_backend() == "vtkEGLRenderWindow"
     assert os.environ["VTK_DEFAULT_OPENGL_WINDOW"] == "vtkEGLRenderWindow"
     monkeypatch.delenv("VTK_DEFAULT_OPENGL_WINDOW")
-    monkeypatch.setattr(render, "_loadable", lambda *names: False)
-    with pytest.raises(render.RenderingUnavailableError, match="libegl1"):
-        render.select_offscreen_backend()
+    monkeypatch.setattr(offscreen, "_loadable", lambda *names: False)
+    with pytest.raises(offscreen.RenderingUnavailableError, match="libegl1"):
+        offscreen.select_offscreen_backend()
     monkeypatch.setenv("DISPLAY", ":0")
-    assert render.select_offscreen_backend() is None
+    assert offscreen.select_offscreen_backend() is None
 
 
 def test_render_rejects_bad_input(tmp_path):
     x = np.linspace(0, 1, 4)
-    strip = SlabGeometry(x, 0.0, 0.01, 0.05)
+    strip = StripGeometry(x, 0.0, 0.01, 0.05)
     d = dict(u=0 * x, w=x, theta=0 * x + 1)
     with pytest.raises(ValueError, match=r"\.png"):
         render.render_mode_shape([strip], [d], tmp_path / "a.jpg")
@@ -141,9 +144,9 @@ _HEADLESS_ENV = {k: v for k, v in os.environ.items()
 
 
 @pytest.fixture(scope="module")
-def offscreen():
+def gl():
     """Skip rendering tests when a tiny render in a child process fails or crashes."""
-    ok, message = render.probe_offscreen(timeout=120, env=_HEADLESS_ENV)
+    ok, message = offscreen.probe_offscreen(timeout=120, env=_HEADLESS_ENV)
     if not ok:
         pytest.skip(f"{message}; install libegl1 libegl-mesa0 libgl1-mesa-dri (or libosmesa6)")
     return message
@@ -161,10 +164,11 @@ _TWO_MODES = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
-from viz.render import SlabGeometry, render_mode_shape
+from fe.interface import StripGeometry
+from viz.render import render_mode_shape
 data = np.load(f"{sys.argv[1]}/modes.npz")
 x, t, b = data["x"], 1e-3, 0.05
-strips = [SlabGeometry(x, -t / 2, t, b), SlabGeometry(x, t / 2, t, b)]
+strips = [StripGeometry(x, -t / 2, t, b), StripGeometry(x, t / 2, t, b)]
 times = []
 for k in (0, 1):
     w, th = data[f"w{k}"], data[f"theta{k}"]
@@ -183,7 +187,7 @@ def _gray(png):
     return img[..., :3].mean(axis=-1)
 
 
-def test_render_two_modes_offscreen(offscreen, tmp_path):
+def test_render_two_modes_offscreen(gl, tmp_path):
     x = np.linspace(0, 0.35, 21)
     (w0, t0), (w1, t1) = cantilever_mode(x, 0.35, 0), cantilever_mode(x, 0.35, 1)
     np.savez(tmp_path / "modes.npz", x=x, w0=w0, theta0=t0, w1=w1, theta1=t1)
@@ -207,11 +211,11 @@ def test_render_two_modes_offscreen(offscreen, tmp_path):
 
 def test_probe_reports_a_crashing_gl_instead_of_crashing(tmp_path):
     """With a broken EGL vendor VTK segfaults; the probe must turn that into (False, msg)."""
-    if render._loadable("libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so"):
+    if offscreen._loadable("libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so"):
         pytest.skip("OSMesa is installed: VTK falls back to it, no crash to provoke")
     env = dict(_HEADLESS_ENV, VTK_DEFAULT_OPENGL_WINDOW="vtkEGLRenderWindow",
                __EGL_VENDOR_LIBRARY_FILENAMES=str(tmp_path / "none.json"))
-    ok, message = render.probe_offscreen(timeout=120, env=env)
+    ok, message = offscreen.probe_offscreen(timeout=120, env=env)
     assert not ok
     assert "exit" in message
 
@@ -229,8 +233,7 @@ def test_cli_render_rejects_bad_input(capsys):
     assert err.count("\n") == 1 and ".png" in err
 
 
-def test_cli_render_double_beam(offscreen, tmp_path):
-    pytest.importorskip("cases.double_beam.model")
+def test_cli_render_double_beam(gl, tmp_path):
     out = tmp_path / "m2.png"
     start = time.perf_counter()
     proc = run_child("import sys; from cli.main import main; sys.exit(main(sys.argv[1:]))",
@@ -249,7 +252,6 @@ def test_cli_render_double_beam(offscreen, tmp_path):
 
 def test_drawn_interface_slip_equals_double_beam_joint_slip():
     """The step between the fibres drawn at the interface is the model's glue slip."""
-    db = pytest.importorskip("cases.double_beam.model")
     model = db.build_double_beam(db.DoubleBeamConfig())
     omega, shapes = model.modes(5)
     lower, upper = model.strips

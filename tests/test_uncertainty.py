@@ -1,4 +1,5 @@
-"""Monte Carlo over the identified joint parameters (cases.double_beam.uncertainty) and
+"""Monte Carlo over the identified joint parameters (inverse.uncertainty,
+inverse.sample_store, cases.double_beam.uncertainty and uncertainty_report) and
 ``iwanfe uncertainty``.
 
 Truths used: the estimator's own delta-method t-intervals (inverse.estimate, checked here
@@ -11,18 +12,25 @@ coarse 7-level study (1 Hz lines over 240-264 Hz) to stay fast.
 import dataclasses
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import stats
 
 import cases.double_beam.uncertainty as unc
-from cli.main import main
+from cases.double_beam.joint_setup import source_estimate
 from cases.double_beam.model import build_double_beam
-from cases.double_beam.study import DoubleBeamStudy, measured_levels, run_study
-from inverse.estimate import kappa_ratio, zeta_with_joint
+from cases.double_beam.settings import DoubleBeamStudy, measured_levels
+from cases.double_beam.study import run_study
+from cases.double_beam.uncertainty_report import run_uncertainty
+from cli.main import main
+from inverse.iwan_modal import kappa_ratio, zeta_with_joint
+from inverse.sample_store import SampleStore
+from inverse.uncertainty import ParameterDistribution, SweepInputs, run_samples, sweep_hash
 from runs.executor import ExecutorSpec, task_seeds
 
+GOLDEN_HASH = Path(__file__).resolve().parent / "golden" / "uncertainty_sweep_hash.json"
 COARSE = dataclasses.replace(unc.SAMPLE_STUDY, n_levels=7, df_hz=1.0, band_hz=(240.0, 264.0),
                              sliders_per_octave=6, n_modes=20)
 N_FE = 3   # FE samples of the executor / resume tests
@@ -38,7 +46,7 @@ def source(model):
     """The exact estimate of measured levels 1-7 at the 90 % level (3 dof), with
     predictions of all 10 levels."""
     st = unc.SAMPLE_STUDY
-    return unc.source_estimate(model, measured_levels(st), st, confidence=0.9)
+    return source_estimate(model, measured_levels(st), st, confidence=0.9)
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +54,7 @@ def reference(model, tmp_path_factory):
     """Uninterrupted serial run of N_FE samples, stored."""
     out = tmp_path_factory.mktemp("ref")
     settings = unc.UncertaintySettings(study=COARSE, n_samples=N_FE, seed=11)
-    rep = unc.run_uncertainty(settings, out=out, progress=False, model=model)
+    rep = run_uncertainty(settings, out=out, progress=False, model=model)
     return settings, rep, out
 
 
@@ -105,10 +113,10 @@ def test_monte_carlo_interval_agrees_with_delta_method_in_the_linear_regime(sour
     standard errors, at the full spread by 40-90)."""
     s, N, conf = 0.005, 20000, 0.9
     f = source.fit
-    dist = unc.ParameterDistribution.from_fit(f, "t", scale=s)
-    inputs = unc.SweepInputs(model=source, data=None, study=None, distribution=dist,
+    dist = ParameterDistribution.from_fit(f, "t", scale=s)
+    inputs = SweepInputs(model=source, data=None, study=None, distribution=dist,
                              simulate=closed_form_sample)
-    nominal, samples = unc.run_samples(inputs, N, seed=5, progress=False)
+    nominal, samples = run_samples(inputs, N, seed=5, progress=False)
     assert all(x.n_draws == 1 for x in samples)
     scaled = dataclasses.replace(f, cov=s ** 2 * f.cov)
     t_q = scaled.tquantile(conf)
@@ -136,7 +144,7 @@ def test_normal_draws_reproduce_the_covariance():
     """(N sum of (a.(x - m))^2 / a^T C a) ~ chi^2_N for every direction a (mean known):
     four directions fix the 2x2 covariance; two-sided bounds at 1e-4 in total."""
     C = np.array([[0.004, -0.003], [-0.003, 0.01]])
-    dist = unc.ParameterDistribution(mean=[0.6, 3.0], cov=C, dof=math.inf)
+    dist = ParameterDistribution(mean=[0.6, 3.0], cov=C, dof=math.inf)
     N = 4000
     draws = [dist.draw(sd) for sd in task_seeds(7, N)]
     assert all(n == 1 for _, n in draws)
@@ -155,12 +163,12 @@ def test_student_t_draws_have_the_f_law_and_truncation_keeps_the_iwan_range(sour
     distribution every draw has -1 < chi < 0 and the acceptance matches the t mass of
     the Iwan range within 4.5 binomial standard deviations."""
     C = np.array([[0.004, -0.003], [-0.003, 0.01]])
-    dist = unc.ParameterDistribution(mean=[0.5, 3.0], cov=C, dof=3.0)
+    dist = ParameterDistribution(mean=[0.5, 3.0], cov=C, dof=3.0)
     N = 3000
     x = np.array([dist.draw(sd)[0] for sd in task_seeds(8, N)]) - dist.mean
     m2 = np.einsum("ni,ij,nj->n", x, np.linalg.inv(C), x)
     assert stats.kstest(m2 / 2.0, stats.f(2, 3).cdf).pvalue > 1e-3
-    fit = unc.ParameterDistribution.from_fit(source.fit, "t")
+    fit = ParameterDistribution.from_fit(source.fit, "t")
     draws = [fit.draw(sd) for sd in task_seeds(9, N)]
     p = np.array([x[0] for x, _ in draws])
     assert np.all((p > 0) & (p < 1))
@@ -170,11 +178,24 @@ def test_student_t_draws_have_the_f_law_and_truncation_keeps_the_iwan_range(sour
     assert abs(N / total - a) < 4.5 * math.sqrt(a * (1 - a) / total), (N / total, a)
     # same seed, same draw; no covariance, the nominal point
     assert np.array_equal(fit.draw(task_seeds(9, 1)[0])[0], draws[0][0])
-    zero = unc.ParameterDistribution.from_fit(source.fit, "t", scale=0.0)
+    zero = ParameterDistribution.from_fit(source.fit, "t", scale=0.0)
     assert np.array_equal(zero.draw(task_seeds(1, 1)[0])[0], [source.fit.p, source.fit.ln_kt])
 
 
 # --------------------------------------------------------------------------- FE sweep
+
+
+def test_store_hash_of_the_default_sweep_is_unchanged(model):
+    """Golden values (tests/golden/uncertainty_sweep_hash.json, its note says why): the
+    store of a finished default sweep stays readable."""
+    golden = json.loads(GOLDEN_HASH.read_text())
+    st = unc.SAMPLE_STUDY
+    data = measured_levels(st)
+    src = source_estimate(model, data, st, confidence=unc.DEFAULT_CONFIDENCE)
+    for kind in ("t", "normal"):
+        dist = ParameterDistribution.from_fit(src.fit, kind)
+        inputs = SweepInputs(model, data, st, dist, unc.simulate_fe)
+        assert sweep_hash(inputs, golden["seed"]) == golden[kind], kind
 
 
 def test_nominal_sample_is_run_study_and_zero_covariance_sample_matches_it(reference, model):
@@ -188,9 +209,9 @@ def test_nominal_sample_is_run_study_and_zero_covariance_sample_matches_it(refer
     assert float(nom["R"]) == ref.setup.R and float(nom["chi"]) == ref.setup.chi
     # the sampled path (chi, R overrides) at zero covariance: round-off only
     data = measured_levels(COARSE)
-    dist = unc.ParameterDistribution.from_fit(rep.source.fit, "t", scale=0.0)
-    inputs = unc.SweepInputs(model, data, COARSE, dist, unc.simulate_fe)
-    _, (zero,) = unc.run_samples(inputs, 1, seed=3, progress=False)
+    dist = ParameterDistribution.from_fit(rep.source.fit, "t", scale=0.0)
+    inputs = SweepInputs(model, data, COARSE, dist, unc.simulate_fe)
+    _, (zero,) = run_samples(inputs, 1, seed=3, progress=False)
     for k in ("frequency_hz", "zeta"):
         np.testing.assert_allclose(zero.values[k], nom[k], rtol=1e-11, atol=0)
 
@@ -202,9 +223,9 @@ def test_per_sample_settings_agree_with_the_default_ones(model):
     got = []
     for st in (unc.SAMPLE_STUDY, DoubleBeamStudy(weak_joint_scales=())):
         data = measured_levels(st)
-        src = unc.source_estimate(model, data, st)
-        inputs = unc.SweepInputs(model, data, st,
-                                 unc.ParameterDistribution.from_fit(src.fit), unc.simulate_fe)
+        src = source_estimate(model, data, st)
+        inputs = SweepInputs(model, data, st,
+                                 ParameterDistribution.from_fit(src.fit), unc.simulate_fe)
         got.append(unc.simulate_fe(inputs))
     a, b = got
     np.testing.assert_allclose(a["frequency_hz"], b["frequency_hz"], rtol=5e-6)
@@ -213,7 +234,7 @@ def test_per_sample_settings_agree_with_the_default_ones(model):
 
 def test_process_pool_gives_bitwise_the_serial_samples(reference, model):
     settings, rep, _ = reference
-    pool = unc.run_uncertainty(settings, executor=ExecutorSpec("processes", 2),
+    pool = run_uncertainty(settings, executor=ExecutorSpec("processes", 2),
                                progress=False, model=model)
     assert same(pool.nominal, rep.nominal)
     assert len(pool.samples) == N_FE
@@ -237,10 +258,10 @@ def test_interrupted_run_resumes_bitwise_computing_only_missing_samples(referenc
             raise Stop
 
     with pytest.raises(Stop):
-        unc.run_uncertainty(settings, out=tmp_path, progress=False, model=model,
+        run_uncertainty(settings, out=tmp_path, progress=False, model=model,
                             on_sample=stop_after_two)
     computed = []
-    again = unc.run_uncertainty(settings, out=tmp_path, progress=False, model=model,
+    again = run_uncertainty(settings, out=tmp_path, progress=False, model=model,
                                 on_sample=lambda r: computed.append(r.index))
     assert seen == [-1, 0] and computed == list(range(1, N_FE))
     assert again.timings["computed"] == N_FE - 1 and again.timings["loaded"] == 2
@@ -249,23 +270,23 @@ def test_interrupted_run_resumes_bitwise_computing_only_missing_samples(referenc
     # a deleted sample is recomputed, nothing else; a loaded store equals fresh results
     (next(tmp_path.glob("samples-*")) / "sample_00001.npz").unlink()
     computed.clear()
-    third = unc.run_uncertainty(settings, out=tmp_path, progress=False, model=model,
+    third = run_uncertainty(settings, out=tmp_path, progress=False, model=model,
                                 on_sample=lambda r: computed.append(r.index))
     assert computed == [1]
     assert all(same(a, b) for a, b in zip(third.samples, rep.samples))
     # more samples extend the finished run (seeds do not depend on n)
     more = dataclasses.replace(settings, n_samples=N_FE + 1)
     computed.clear()
-    ext = unc.run_uncertainty(more, out=ref_out, progress=False, model=model,
+    ext = run_uncertainty(more, out=ref_out, progress=False, model=model,
                               on_sample=lambda r: computed.append(r.index))
     assert computed == [N_FE]
     assert all(same(a, b) for a, b in zip(ext.samples, rep.samples))
     # another seed is another sweep: its own directory; a foreign manifest is refused
-    assert unc.sweep_hash(unc.SweepInputs(model, measured_levels(COARSE), COARSE,
+    assert sweep_hash(SweepInputs(model, measured_levels(COARSE), COARSE,
                                           rep.distribution, unc.simulate_fe), 12) != rep.digest
     store = next(tmp_path.glob("samples-*"))
     with pytest.raises(ValueError, match="another Monte Carlo sweep"):
-        unc.SampleStore(store, "0" * 64)
+        SampleStore(store, "0" * 64)
 
 
 def test_report_bands_and_closed_form(reference):

@@ -2,7 +2,7 @@
 
 The strips are written either as their centroid lines (``geometry="lines"``: one point
 per FE node, line cells) or as hexahedral slabs of their true thickness and width
-(``geometry="slabs"``: the corner fibres, see :func:`viz.render.slab_fields`). Every
+(``geometry="slabs"``: the corner fibres, see :func:`viz.slab.slab_fields`). Every
 mode ``k`` (1-based) becomes the point-data 3-vector ``mode_k`` = displacement
 ``(u_x, 0, u_z)`` in m (mode-shape units); in "lines" geometry ``rotation_k`` holds the
 rotation ``theta = dw/dx`` (rad) as well. Cell data ``strip`` numbers the strips from 0.
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from viz.render import slab_fields
+from viz.slab import slab_fields
 
 __all__ = ["EXPORT_SUFFIXES", "mode_mesh", "write_modes", "read_modes"]
 

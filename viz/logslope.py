@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-__all__ = ["plot_logslope"]
+__all__ = ["plot_logslope", "plot_estimate"]
 
 
 def plot_logslope(x_used, y_used, x_fit, y_fit, *, x_held=(), y_held=(), x_nonpositive=(),
@@ -82,3 +82,31 @@ def plot_logslope(x_used, y_used, x_fit, y_fit, *, x_held=(), y_held=(), x_nonpo
     if path is not None:
         fig.savefig(path, dpi=150)
     return fig
+
+
+def plot_estimate(est, path: str, title: str | None = None) -> None:
+    """Draw the Fig. 8-style log-slope plot of an :class:`~inverse.estimate.Estimate`
+    (:func:`plot_logslope` of its used, held-out and excluded differences, the fitted
+    curve and its prediction) to ``path``."""
+    used = sorted(est.points_used, key=lambda p: p["x"])
+    held = [d for d in est.differences if not d["in_fit"]]
+    nonpos = [p["x"] for p in est.points_excluded]
+    nonpos += [d["x"] for d in held if d["y"] is None]
+    held_pos = [d for d in held if d["y"] is not None]
+    fit_curve = sorted(est.points_used + est.points_excluded, key=lambda p: p["x"])
+    pred = sorted([d for d in held if d["x"] > fit_curve[-1]["x"]], key=lambda p: p["x"])
+    if pred:
+        pred = [fit_curve[-1]] + pred
+    ci = est.chi_interval
+    note = (f"chi = {est.chi:.4f}  [{ci[0]:.2f}, {ci[1]:.2f}]\n"
+            f"|kappa1|B = {est.kappa1_B:.4g} 1/s^2\nmethod {est.method}")
+    if est.R is not None:
+        note += f"\nR~ = {est.R:.4g} N/m^(chi+2)"
+    plot_logslope(
+        [p["x"] for p in used], [p["y"] for p in used],
+        [p["x"] for p in fit_curve], [p["model_y"] for p in fit_curve],
+        x_held=[d["x"] for d in held_pos], y_held=[d["y"] for d in held_pos],
+        x_nonpositive=nonpos,
+        x_pred=[p["x"] for p in pred], y_pred=[p["model_y"] for p in pred],
+        labels_used=[f"{p['from_level']}->{p['to_level']}" for p in used],
+        base=est.log_base, title=title, annotation=note, path=path)

@@ -6,15 +6,9 @@ Euler-Bernoulli frame elements (:mod:`fe.beam`, DOFs ``u, w, theta = dw/dx``) al
 own centroid line: the lower strip at ``z = -h/2``, the upper strip at ``z = +h/2``,
 the interface at ``z = 0``.
 
-Interface kinematics (derived, with ``theta = dw/dx``, a fibre at height ``zeta`` above
-a centroid moves axially by ``u - zeta theta``): the upper strip's lower face is at
-``zeta = -h/2``, the lower strip's upper face at ``zeta = +h/2``, so the tangential slip
-of the upper strip over the lower one is::
-
-    s = (u_up + (h/2) theta_up) - (u_lo - (h/2) theta_lo)          [m]
-
-(identical to ``(u_up - (h/2) phi_up) - (u_lo + (h/2) phi_lo)`` written with the
-opposite rotation sign ``phi = -dw/dx``). The normal gap is ``w_up - w_lo``.
+Interface kinematics (:mod:`fe.interface`): the tangential slip of the upper strip over
+the lower one is ``s = (u_up + (h/2) theta_up) - (u_lo - (h/2) theta_lo)`` (m), the
+normal gap ``w_up - w_lo``.
 
 Joint elements sit at the ``n_joints`` nodes of the glued zone. Each carries a linear
 tangential spring ``k_j`` on ``s`` (trapezoidal share of the stuck glue stiffness
@@ -31,17 +25,9 @@ E, rho                     70 GPa, 2700 kg/m3  handbook values of wrought alumin
                                                (68-73 GPa, 2660-2800 kg/m3)
 strip length, width, h     350, 50, 1 mm       paper Sec. 4
 glue zone                  last 20 mm          paper Sec. 4 ("evenly distributed ... 20 mm")
-K_T (stuck tangential      1.0e8 N/m           not measured. A thin rigid epoxy bond
-stiffness of the glue)                         (G = 1 GPa, 0.1 mm) would give G b L_g / t_g
-                                               = 1e10 N/m, but then the glue-slip
-                                               participation p of the measured mode is
-                                               5e-5, and the measured relative frequency
-                                               drop (830 / 2.50677e6 = 3.3e-4, paper
-                                               Table 4, levels 1 -> 10) would need the glue
-                                               to lose ~87 % of its stiffness (p ~ 1/K_T:
-                                               drop = p d / (1 - d)), far past micro-slip.
-                                               1e8 N/m gives p = 3.6e-3: the top level
-                                               softens the glue by ~9 %, micro-slip.
+K_T (stuck tangential      1.0e8 N/m           not measured; chosen so that the measured
+stiffness of the glue)                         frequency drop needs micro-slip only
+                                               (:mod:`cases.double_beam.calibration`)
 contact along free length  tied (bilateral)    the strips lie flat on each other: equal
                                                transverse displacement, frictionless
                                                tangential sliding (``contact="tied"``);
@@ -59,54 +45,19 @@ Acc. 2, Acc. 3             1.0 g each, tip     the paper's glue-zone acceleromet
                                                in the tests), one on each strip at the end
 =========================  ==================  =============================================
 
-Which model mode was measured, and the one calibrated parameter
----------------------------------------------------------------
-The measured mode (omega^2 = 2.50677e6 rad^2/s^2, 252.0 Hz) is the one whose frequency
-and damping changed with the force, i.e. a mode that slips the glue. In the tied model
-every mode is an in-phase bending mode of the pair: without glue and attachments 6.7,
-42.1, 117.8, 230.9, 381.7 Hz, the single-strip cantilever values (twice the stiffness,
-twice the mass). The tip glue stiffens every mode that rotates the tip: the interface
-slip ``h theta`` held by the glue loads the strips axially (one in tension, one in
-compression), a tip rotational spring ``E A h^2 / (2 L)`` = 3 x (2 E I / L) for a rigid
-point bond; with rigid glue the 4th mode rises from 230.9 to 240.9 Hz (no attachments).
-Out-of-phase modes (only with ``contact="glue-only"``: 53, 145, 280 Hz in the
-calibrated model) carry no tangential glue slip (exactly zero by the symmetry of two
-identical strips, ~3e-5 with the attachments), so they cannot show the Iwan softening.
-(The uncalibrated glue-only model has one at 250.8 Hz, 0.5 % from the measurement: a
-coincidence this argument rejects.) The measured mode is therefore the 4th in-phase
-bending mode, the only model mode within 0.5 % of 252.0 Hz after calibration; its
-glue-slip participation is 3.6e-3 (modes 2, 3, 5: 1.2e-2, 6.4e-3, 2.4e-3): the model
-does not single it out by slip, so the paper's remark that the other modes did not
-change with the force is not explained by the glue joint alone.
-
-Neither K_T (rigid glue is the upper limit, 240.9 Hz without attachments) nor a
-plausible E (76.6 GPa without the attachments, 86 GPa with them) reaches 252.0 Hz.
-The single parameter calibrated to 252.0 Hz is the clamp grip, the length of strip held
-in the clamp, which the paper does not give: :data:`CALIBRATED_CLAMP_LENGTH` = 18.6 mm (free length 331.4 mm), reproduced by
-:func:`calibrate_clamp_length` on the default mesh. Uncalibrated (no grip, all other
-defaults) the model puts the mode at 227.1 Hz, 9.9 % low. Calibration scales all bending
-frequencies alike, so the 2nd bending mode lands at 53.1 Hz, just inside the 50-450 Hz
-band, and the measured mode is the 3rd model mode in the band while the paper calls it
-the second of its figure. At the drive point the 2nd mode's accelerance peak is 0.11
-times the 4th mode's (equal damping), at the band edge where the exciter is least
-reliable (paper Sec. 4): the likely reason it was not counted.
-
-Glue-slip participation of a mode is the fraction of its strain energy stored in the
-tangential joint springs, ``sum_j k_j s_j^2 / (phi^T K phi)``; by the Rayleigh
-quotient it is also ``d ln(omega^2) / d ln K_T``, the relative frequency sensitivity to
-the stuck glue stiffness, i.e. how strongly an Iwan joint there can soften the mode.
+Which model mode was measured (the 4th in-phase bending mode,
+:data:`MEASURED_BENDING_ORDER`) and the one calibrated parameter (the clamp grip,
+:data:`CALIBRATED_CLAMP_LENGTH`): :mod:`cases.double_beam.calibration`.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import brentq
 
 from fe.assembly import (
     assemble,
-    coupling_rows,
     coupling_stiffness,
     expand,
     free_dofs,
@@ -116,6 +67,8 @@ from fe.assembly import (
     restrict_columns,
 )
 from fe.beam import THETA, U, W, Section, frame_mass, frame_stiffness
+from fe.interface import (normal_gap_rows, stacked_energy_split, stacked_strips,
+                          tangential_slip_rows)
 from fe.mesh import DofMap, LineMesh, line_mesh, mesh_with_element_size
 from fe.modal import normal_modes
 
@@ -123,7 +76,8 @@ MEASURED_FREQUENCY_HZ = 252.0  # sqrt(2.50677e6) / (2 pi), paper Table 4, experi
 MATCH_TOLERANCE = 0.005  # relative, for "matches_measured"
 DEFAULT_BAND_HZ = (50.0, 450.0)  # paper Sec. 4: stepped sine 50-450 Hz
 #: Clamp grip length (m) calibrated so that the 4th in-phase bending mode of the default
-#: model is at 252.0 Hz; reproduced by :func:`calibrate_clamp_length`.
+#: model is at 252.0 Hz; reproduced by
+#: :func:`cases.double_beam.calibration.calibrate_clamp_length`.
 CALIBRATED_CLAMP_LENGTH = 0.0186168
 UNCALIBRATED_CLAMP_LENGTH = 0.0
 
@@ -193,16 +147,6 @@ class DoubleBeamConfig:
         return Section(E=self.E, rho=self.rho, width=self.width, thickness=self.thickness)
 
 
-@dataclass(frozen=True)
-class StripGeometry:
-    """One strip: node positions x (m, from the clamp face), centroid height, h, b (m)."""
-
-    x: np.ndarray
-    z_center: float
-    thickness: float
-    width: float
-
-
 @dataclass
 class DoubleBeamModel:
     """Assembled linear model over the free DOFs (the clamp removed).
@@ -224,7 +168,7 @@ class DoubleBeamModel:
         Joint positions from the clamp face, m.
     drive_dof, response_dof : int
         Free-DOF indices of the driven w (lower strip) and the measured w (upper strip).
-    strips : list of StripGeometry
+    strips : list of fe.interface.StripGeometry
         ``[lower, upper]``.
     """
 
@@ -277,27 +221,11 @@ class DoubleBeamModel:
                  "theta": dm.component(full, THETA)} for dm in self.dofmaps]
 
     def energy_split(self, shape: np.ndarray) -> dict:
-        """Kinetic-energy fractions of a shape in the strips' own mass (point masses excluded).
-
-        With identical strips of mass matrix ``M_s`` the pair's kinetic energy
-        ``x_lo^T M_s x_lo + x_up^T M_s x_up = 2 (a^T M_s a + d^T M_s d)`` with
-        ``a = (x_up + x_lo)/2`` (in phase) and ``d = (x_up - x_lo)/2`` (out of phase);
-        the frame element has no axial-transverse mass coupling, so each splits exactly
-        into axial (u) and transverse (w, theta) parts.
-        """
+        """Kinetic-energy fractions of a shape in the strips' own mass (point masses
+        excluded): :func:`fe.interface.stacked_energy_split` of the two strips."""
         full = self.full_vector(np.asarray(shape, dtype=float))
         lo, up = (full[dm.offset:dm.stop] for dm in self.dofmaps)
-        a, d = 0.5 * (up + lo), 0.5 * (up - lo)
-        axial = np.zeros(lo.size, dtype=bool)
-        axial[U::3] = True
-        Ms = self._strip_mass
-        parts = {}
-        for name, v in (("in_phase", a), ("out_of_phase", d)):
-            va, vt = np.where(axial, v, 0.0), np.where(axial, 0.0, v)
-            parts[f"{name}_axial"] = float(va @ (Ms @ va))
-            parts[f"{name}_bending"] = float(vt @ (Ms @ vt))
-        total = sum(parts.values())
-        return {k: v / total for k, v in parts.items()}
+        return stacked_energy_split(lo, up, self._strip_mass)
 
     def classify_mode(self, shape: np.ndarray) -> str:
         """'in-phase bending', 'out-of-phase bending', 'axial' or 'out-of-phase axial'.
@@ -315,7 +243,9 @@ class DoubleBeamModel:
         """Fraction of the shape's strain energy in the tangential joint springs.
 
         ``sum_j k_j s_j^2 / (phi^T K phi)`` with ``s = slip_matrix phi``; for a mode this
-        equals ``d ln(omega^2) / d ln(K_T)`` (Rayleigh quotient). Dimensionless, in [0, 1].
+        equals ``d ln(omega^2) / d ln(K_T)`` (Rayleigh quotient), the relative frequency
+        sensitivity to the stuck glue stiffness, i.e. how strongly an Iwan joint there
+        can soften the mode. Dimensionless, in [0, 1].
         """
         shape = np.asarray(shape, dtype=float)
         s = self.slip_matrix @ shape
@@ -403,14 +333,10 @@ def build_double_beam(config: DoubleBeamConfig | None = None) -> DoubleBeamModel
     normal_nodes = np.arange(1, n_nodes) if config.contact == "tied" else glue_nodes
     trib = mesh.tributary_length()[normal_nodes]
     k_normal = config.E * b * trib / h  # two half-thicknesses h/2 in series
-    G_n = coupling_rows(np.column_stack([upper.dof(normal_nodes, W), lower.dof(normal_nodes, W)]),
-                        [1.0, -1.0], n)
+    G_n = normal_gap_rows(upper, lower, normal_nodes, n)
 
     # tangential joints: s = (u_up + h/2 theta_up) - (u_lo - h/2 theta_lo)
-    G_t = coupling_rows(
-        np.column_stack([upper.dof(glue_nodes, U), upper.dof(glue_nodes, THETA),
-                         lower.dof(glue_nodes, U), lower.dof(glue_nodes, THETA)]),
-        [1.0, 0.5 * h, -1.0, 0.5 * h], n)
+    G_t = tangential_slip_rows(upper, lower, glue_nodes, h, h, n)
     w = mesh.tributary_length(glue_nodes)
     k_joint = config.K_T * w / w.sum()
 
@@ -430,7 +356,6 @@ def build_double_beam(config: DoubleBeamConfig | None = None) -> DoubleBeamModel
 
     fixed = np.concatenate([lower.node_dofs([0]).ravel(), upper.node_dofs([0]).ravel()])
     free = free_dofs(n, fixed)
-    z_lo, z_up = -0.5 * h, 0.5 * h
     return DoubleBeamModel(
         config=config,
         mesh=mesh,
@@ -446,7 +371,7 @@ def build_double_beam(config: DoubleBeamConfig | None = None) -> DoubleBeamModel
         joint_x=mesh.x[glue_nodes].copy(),
         drive_dof=free_index(free, int(lower.dof(i_drive, W))),
         response_dof=free_index(free, int(upper.dof(i_drive, W))),
-        strips=[StripGeometry(mesh.x.copy(), z_lo, h, b), StripGeometry(mesh.x.copy(), z_up, h, b)],
+        strips=stacked_strips(mesh.x, h, b),
         _strip_mass=M_strip,
     )
 
@@ -462,21 +387,3 @@ def bending_mode_frequency(model: DoubleBeamModel, order: int) -> float:
 
 
 MEASURED_BENDING_ORDER = 4  # the measured mode is the 4th in-phase bending mode
-
-
-def calibrate_clamp_length(config: DoubleBeamConfig | None = None,
-                           target_hz: float = MEASURED_FREQUENCY_HZ,
-                           order: int = MEASURED_BENDING_ORDER, xtol: float = 1e-7) -> float:
-    """Clamp grip length (m) that puts the ``order``-th in-phase bending mode at ``target_hz``.
-
-    Root of ``f_order(grip) - target`` by Brent's method on grip in [0, 0.2 length].
-    """
-    config = DoubleBeamConfig() if config is None else config
-
-    def residual(grip):
-        return bending_mode_frequency(build_double_beam(replace(config, clamp_length=grip)), order) - target_hz
-
-    lo, hi = 0.0, 0.2 * config.length
-    if residual(lo) > 0:
-        raise ValueError("the model is already stiffer than the target without any grip")
-    return float(brentq(residual, lo, hi, xtol=xtol))

@@ -13,14 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
+from cases.registry import CASES, MEASURED_DATA, fe_check
 from inverse.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
 from ident.errors import InputError
 from runs.jsonio import print_json, to_jsonable
 from ident.measured import read_measured
-from cases.paper_data import DATA_FILE
 
 NAME = "diagnose"
-SHIPPED = {"double-beam": DATA_FILE}
 
 
 def register(subparsers) -> None:
@@ -63,12 +62,12 @@ def load(file: str | None, case: str | None):
     if file is None and case is None:
         raise InputError("give FILE, --case NAME, or both (FILE with a model case)")
     if file is not None:
-        if case is not None and case not in SHIPPED:
+        if case is not None and case not in CASES:
             raise InputError(f"--case {case!r} with FILE: the case must be a model "
-                             f"({', '.join(SHIPPED)})")
+                             f"({', '.join(CASES)})")
         return read_measured(file), None
-    if case in SHIPPED:
-        return read_measured(SHIPPED[case]), None
+    if case in MEASURED_DATA:
+        return read_measured(MEASURED_DATA[case]), None
     parts = case.split(":")
     if len(parts) == 3 and parts[0] == "synthetic":
         from cases.synthetic import CAUSES, generate_case
@@ -84,7 +83,7 @@ def load(file: str | None, case: str | None):
         return c.data, {"cause": c.cause, "seed": seed,
                         "effect_size": c.truth["effect_sigma"], "chi": c.truth["chi"]}
     raise InputError(f"--case: unknown case {case!r}; use "
-                     f"{', '.join(SHIPPED)} or synthetic:CAUSE:SEED")
+                     f"{', '.join(MEASURED_DATA)} or synthetic:CAUSE:SEED")
 
 
 def _fmt(v) -> str:
@@ -230,11 +229,9 @@ def run(args) -> int:
     result = diagnose(data, mode=args.mode, cv_all=args.cv_all)
     if truth is not None:
         result["synthetic_truth"] = truth
-    if args.case == "double-beam":
-        from cases.double_beam.fe_check import double_beam_fe_check
-
+    if args.case in CASES:  # a model case: its FE-level check
         level1 = data.for_mode(result["mode"]) if "mode" in result else data
-        result["fe_check"] = double_beam_fe_check(measured_omega2=float(level1.omega2[0]))
+        result["fe_check"] = fe_check(args.case, float(level1.omega2[0]))
     if args.out:
         write_report(result, Path(args.out), Path(source).name if args.file else source)
     if args.json:

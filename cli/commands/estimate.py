@@ -10,13 +10,13 @@ from __future__ import annotations
 import argparse
 import math
 
+from cases.registry import CASES, build_case
 from inverse.estimate import (
-    CASES,
     DEFAULT_CONFIDENCE,
     DEFAULT_FORCE_SCALE,
     METHODS,
     estimate,
-    format_table,
+    format_levels,
 )
 from runs.jsonio import print_json
 from ident.measured import read_measured
@@ -62,42 +62,17 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def plot_estimate(est, path: str, title: str | None = None) -> None:
-    """Draw the Fig. 8-style log-slope plot of an :class:`~inverse.estimate.Estimate`."""
-    from viz.logslope import plot_logslope
-
-    used = sorted(est.points_used, key=lambda p: p["x"])
-    held = [d for d in est.differences if not d["in_fit"]]
-    nonpos = [p["x"] for p in est.points_excluded]
-    nonpos += [d["x"] for d in held if d["y"] is None]
-    held_pos = [d for d in held if d["y"] is not None]
-    fit_curve = sorted(est.points_used + est.points_excluded, key=lambda p: p["x"])
-    pred = sorted([d for d in held if d["x"] > fit_curve[-1]["x"]], key=lambda p: p["x"])
-    if pred:
-        pred = [fit_curve[-1]] + pred
-    ci = est.chi_interval
-    note = (f"chi = {est.chi:.4f}  [{ci[0]:.2f}, {ci[1]:.2f}]\n"
-            f"|kappa1|B = {est.kappa1_B:.4g} 1/s^2\nmethod {est.method}")
-    if est.R is not None:
-        note += f"\nR~ = {est.R:.4g} N/m^(chi+2)"
-    plot_logslope(
-        [p["x"] for p in used], [p["y"] for p in used],
-        [p["x"] for p in fit_curve], [p["model_y"] for p in fit_curve],
-        x_held=[d["x"] for d in held_pos], y_held=[d["y"] for d in held_pos],
-        x_nonpositive=nonpos,
-        x_pred=[p["x"] for p in pred], y_pred=[p["model_y"] for p in pred],
-        labels_used=[f"{p['from_level']}->{p['to_level']}" for p in used],
-        base=est.log_base, title=title, annotation=note, path=path)
-
-
 def run(args) -> int:
     if not math.isfinite(args.force_scale) or args.force_scale <= 0:
         raise ValueError(f"--force-scale must be a positive number, got {args.force_scale}")
     data = read_measured(args.file)
+    model = None if args.case is None else build_case(args.case)
     est = estimate(data, fit_levels=args.fit_levels, method=args.method, mode=args.mode,
-                   case=args.case, force_scale=args.force_scale, fe_mode=args.fe_mode,
-                   confidence=args.confidence)
+                   model=model, case_name=args.case or "model", force_scale=args.force_scale,
+                   fe_mode=args.fe_mode, confidence=args.confidence)
     if args.plot:
+        from viz.logslope import plot_estimate
+
         plot_estimate(est, args.plot, title=f"{args.file}: mode {est.mode}")
     if args.json:
         out = est.to_dict()
@@ -108,3 +83,59 @@ def run(args) -> int:
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0
+
+
+def format_table(est, source: str = "") -> str:
+    """Readable report of an :class:`~inverse.estimate_result.Estimate` (without --json)."""
+    c = est.confidence
+    lines = [f"iwanfe estimate {source}  mode {est.mode}  method {est.method}  "
+             f"fit levels {format_levels(est.fit_levels)}  abscissa {est.abscissa}"]
+    ci = est.chi_interval
+    ki = est.kappa1_B_interval
+    lines.append(f"  chi          = {est.chi:.5f}   ({c:.0%} interval {ci[0]:.3f} .. {ci[1]:.3f})")
+    lines.append(f"  |kappa1| B   = {est.kappa1_B:.4g} 1/s^2   ({ki[0]:.3g} .. {ki[1]:.3g}), "
+                 f"at level {est.reference_level} (excitation {est.reference_excitation:g})")
+    lines.append(f"  kappa2/|kappa1| = {est.kappa2_over_kappa1:.4f} "
+                 f"({'printed eq. A15' if est.method == 'paper' else 'exact'})")
+    if est.ratio_z is not None:
+        lines.append(f"  eq. 35: z = {est.ratio_z:.4g}, slope chi+1 = {est.chi + 1:.5f}, "
+                     f"intercept a0 = {est.intercept_a0:.4f}, residual std {est.residual_std:.3g} "
+                     f"(ln units), dof {est.dof}")
+    if est.case is not None:
+        cs = est.case
+        ri = est.R_interval
+        lines.append(f"  case {cs.name}: FE mode {cs.fe_mode} ({cs.fe_frequency_hz:.2f} Hz), "
+                     f"force {cs.reference_force:.4g} N at level {est.reference_level} "
+                     f"({cs.force_scale:g} N per excitation unit)")
+        lines.append(f"  B~ = {est.B:.4g} m^(chi+1)/kg   R~ = {est.R:.4g} N/m^(chi+2)   "
+                     f"({ri[0]:.3g} .. {ri[1]:.3g})")
+    else:
+        lines.append("  B, R: not computed (no --case)")
+    used = ", ".join(f"{p['from_level']}->{p['to_level']}" for p in est.points_used)
+    lines.append(f"  points used: {used}")
+    if est.points_excluded:
+        lines.append("  points excluded: " + ", ".join(
+            f"{p['from_level']}->{p['to_level']} ({p['delta_d']:.3g})" for p in est.points_excluded))
+    lines.append("")
+    lines.append(" level  held  loss omega^2 [rad^2/s^2]        growth zeta [%]              "
+                 "omega^2 [rad^2/s^2]       zeta [%]")
+    lines.append("              pred     meas   err%        pred       meas      err%     "
+                 "pred        meas         pred     meas")
+    for p in est.predictions:
+        if p["delta_omega2"] is None:
+            dpart = " " * 60
+        else:
+            e1 = p["delta_omega2_error_percent"]
+            e2 = p["delta_zeta_error_percent"]
+            dpart = (f"{p['delta_omega2']:8.2f} {p['measured_delta_omega2']:8.2f} "
+                     f"{e1 if e1 is not None else float('nan'):6.1f}   "
+                     f"{100 * p['delta_zeta']:10.4e} {100 * p['measured_delta_zeta']:10.4e} "
+                     f"{e2 if e2 is not None else float('nan'):7.1f}")
+        lines.append(f" {p['level']:5d}  {'*' if p['held_out'] else ' ':>4}  {dpart}  "
+                     f"{p['omega2']:11.1f} {p['measured_omega2']:11.1f}  "
+                     f"{100 * p['zeta']:7.4f}  {100 * p['measured_zeta']:7.4f}")
+    lines.append("  (* = held out of the fit; loss = omega^2[v-1] - omega^2[v]; "
+                 "err% = 100 (pred - meas)/meas)")
+    for w in est.data_warnings:
+        lines.append(f"warning: {w}")
+    return "\n".join(lines)

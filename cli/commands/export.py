@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cli.commands.render import CASES, build_case_model, case_modes
+from cases.registry import CASES, build_case, case_modes
 
 
 def register(subparsers) -> None:
@@ -42,7 +42,7 @@ def run(args) -> int:
         )
     if args.modes < 1:
         raise ValueError(f"--modes must be >= 1, got {args.modes}")
-    model = build_case_model(args.case)
+    model = build_case(args.case)
     freqs, shapes = case_modes(model, args.modes)
     modes = [model.strip_displacements(shapes[:, k]) for k in range(shapes.shape[1])]
     written = write_modes(out, model.strips, modes, freqs, geometry=args.geometry)

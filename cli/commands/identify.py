@@ -17,7 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ident.frf_files import read_frf
-from ident.identify import QUANTITIES, identify, mac, modal_data_from_levels
+from ident.identify import identify
+from ident.poles import QUANTITIES, mac
+from ident.tracking import modal_data_from_levels
 from runs.jsonio import print_json
 
 NAME = "identify"

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
+from cases.iwan_joint import joint_summary
+from joints.iwan import IwanParameters, backbone, steady_loop
 from runs.jsonio import print_json
-from joints.describing import describing_function, kappa1, kappa2_exact, kappa2_paper
-from joints.iwan import IwanParameters, backbone, dissipation_per_cycle, steady_loop
 
 NAME = "joint"
 DEFAULT_FRACTIONS = (0.1, 0.5, 1.0, 2.0)
@@ -47,38 +47,6 @@ def register(subparsers) -> None:
     parser.add_argument("--plot", metavar="FILE.png", default=None,
                         help="draw the backbone and the loops at the amplitudes")
     parser.set_defaults(func=run)
-
-
-def joint_summary(p: IwanParameters, amplitudes) -> dict:
-    """Everything ``iwanfe joint`` reports, as plain numbers (SI units)."""
-    amplitudes = np.asarray(amplitudes, dtype=float)
-    bad = ~(np.isfinite(amplitudes) & (amplitudes > 0.0))
-    if bad.any():
-        raise ValueError(f"amplitude must be finite and > 0, got {amplitudes[bad][0]:g}")
-    k_in, k_q = describing_function(p, amplitudes)
-    k_in, k_q = np.atleast_1d(k_in), np.atleast_1d(k_q)
-    dissipation = np.atleast_1d(dissipation_per_cycle(p, amplitudes))
-    k2p = kappa2_paper(p.R, p.chi)
-    rows = []
-    for A, ki, kq, d in zip(amplitudes, k_in, k_q, dissipation):
-        micro = A < p.phi_max
-        rows.append({
-            "amplitude": float(A),
-            "regime": "micro" if micro else "macro",
-            "stiffness_in_phase": float(ki),
-            "stiffness_quadrature": float(kq),
-            "dissipation_per_cycle": float(d),
-            "stiffness_in_phase_paper_kappa2": (
-                float(p.K_T - k2p * A ** (p.chi + 1.0)) if micro else None),
-        })
-    return {
-        "chi": p.chi, "K_T": p.K_T, "F_S": p.F_S, "beta": p.beta,
-        "R": p.R, "phi_max": p.phi_max, "S": p.S,
-        "kappa1": kappa1(p.R, p.chi),
-        "kappa2_exact": kappa2_exact(p.R, p.chi),
-        "kappa2_paper": k2p,
-        "amplitudes": rows,
-    }
 
 
 def _table(summary: dict) -> str:

@@ -10,31 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-CASES = ("double-beam",)
-
-
-def build_case_model(case: str):
-    """The FE model of a case that has strip geometry (for render and export)."""
-    if case == "double-beam":
-        from cases.double_beam.model import DoubleBeamConfig, build_double_beam
-
-        return build_double_beam(DoubleBeamConfig())
-    raise ValueError(f"unknown case '{case}': choose from {', '.join(CASES)}")
-
-
-def case_modes(model, n_modes: int):
-    """Lowest ``n_modes`` modes of ``model``: (frequencies in Hz, shapes (n_free, n))."""
-    if n_modes < 1:
-        raise ValueError(f"number of modes must be >= 1, got {n_modes}")
-    n_free = getattr(model, "n_free", None)
-    if n_free is not None and n_modes > n_free:
-        raise ValueError(f"the model has only {n_free} degrees of freedom, asked for {n_modes} modes")
-    omega, shapes = model.modes(n_modes)
-    omega = np.asarray(omega, dtype=float)
-    shapes = np.asarray(shapes)
-    if omega.size < n_modes or shapes.ndim != 2 or shapes.shape[1] < n_modes:
-        raise ValueError(f"the model has only {omega.size} modes, asked for {n_modes}")
-    return omega[:n_modes] / (2 * np.pi), shapes[:, :n_modes]
+from cases.registry import CASES, build_case, case_modes
 
 
 def register(subparsers) -> None:
@@ -78,7 +54,7 @@ def run(args) -> int:
 
     from viz.render import render_mode_shape
 
-    model = build_case_model(args.case)
+    model = build_case(args.case)
     freqs, shapes = case_modes(model, args.mode)
     shape = shapes[:, args.mode - 1]
     kind = model.classify_mode(shape)

@@ -7,7 +7,7 @@ Targets:
   of modes 2, 4, 6 at each level, the joint amplitudes at the identified resonances
   (Table 1), the chi fit of eq. 35 (Fig. 5) and the R errors of eq. 37 (Table 2) are
   printed beside the paper's values; then the improved method (simulated joint
-  amplitudes, exact kappas, no modal decoupling; :func:`cases.lumped10.model.fit_improved`).
+  amplitudes, exact kappas, no modal decoupling; :func:`cases.lumped10.improved_fit.fit_improved`).
 * ``double-beam``: the FE double beam of paper section 4 with one Iwan element per glue
   node (chi and R~ from the measured levels 1-7), driven through the paper's 10-level
   stepped-sine campaign (5 mV .. 2.56 V); per-level frequency and damping identified
@@ -151,8 +151,8 @@ _DOUBLE_BEAM_ONLY = ("data", "fit_levels", "force_scale", "beta", "chi", "R_join
 
 
 def _run_lumped(args) -> int:
-    from cli.commands.estimate import plot_estimate
-    from cases.lumped10.model import MODE_BANDS, LumpedStudy, run_study
+    from viz.logslope import plot_estimate
+    from cases.lumped10.study import MODE_BANDS, LumpedStudy, run_study
     from viz.frf_plots import plot_damping_growth, plot_frf_levels
 
     for name in _DOUBLE_BEAM_ONLY:
@@ -203,7 +203,7 @@ def _run_lumped(args) -> int:
 
 
 def _double_beam_study(args):
-    from cases.double_beam.study import DoubleBeamStudy
+    from cases.double_beam.settings import DoubleBeamStudy
 
     if args.protocol != "default":
         raise ValueError("--protocol applies to the lumped target only (double-beam uses "
@@ -234,7 +234,7 @@ def _double_beam_study(args):
 
 
 def _double_beam_text(rep, files, wall) -> str:
-    from cases.double_beam.study import headline
+    from cases.double_beam.statements import headline
 
     lines = ["Double beam (paper section 4): FE model + Iwan glue joints, "
              f"{rep.campaign.force.size} levels x {rep.campaign.frequency_hz.size} lines", ""]
@@ -279,7 +279,8 @@ def _double_beam_text(rep, files, wall) -> str:
 
 
 def _run_double_beam(args) -> int:
-    from cases.double_beam.study import run_study, write_report
+    from cases.double_beam.files import write_report
+    from cases.double_beam.study import run_study
 
     t0 = time.perf_counter()
     study = _double_beam_study(args)

@@ -24,7 +24,8 @@ CASES = ("double-beam",)
 
 
 def register(subparsers) -> None:
-    from cases.double_beam.uncertainty import DEFAULT_CONFIDENCE, DEFAULT_SAMPLES, DEFAULT_SEED, DISTRIBUTIONS
+    from cases.double_beam.uncertainty import DEFAULT_CONFIDENCE, DEFAULT_SAMPLES, DEFAULT_SEED
+    from inverse.uncertainty import DISTRIBUTIONS
 
     parser = subparsers.add_parser(
         NAME,
@@ -113,7 +114,7 @@ def _f(x, spec):
 
 
 def text_report(rep, source: str, files, wall: float) -> str:
-    """The readable report of an :class:`~cases.double_beam.uncertainty.UncertaintyReport`."""
+    """The readable report of an :class:`~cases.double_beam.uncertainty_report.UncertaintyReport`."""
     st, src, dist = rep.settings, rep.source, rep.distribution
     c = st.confidence
     lo, hi = (100 * q for q in st.quantiles)
@@ -211,8 +212,8 @@ def write_outputs(rep, out: Path) -> list[Path]:
 
 
 def run(args) -> int:
-    from cases.double_beam.study import DEFAULT_DATA
-    from cases.double_beam.uncertainty import run_uncertainty
+    from cases.double_beam.settings import DEFAULT_DATA
+    from cases.double_beam.uncertainty_report import run_uncertainty
 
     t0 = time.perf_counter()
     settings = _settings(args)

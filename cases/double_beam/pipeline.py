@@ -1,0 +1,171 @@
+"""One simulation of the double-beam reproduction, from the measured levels to estimates.
+
+:func:`simulate_study`::
+
+    measured levels 1-7 --estimate (exact)--> chi, R~      (paper eq. 33-37)
+    FE double beam + one Iwan element per glue node (chi, R~ shares, beta = 0)
+    --HB stepped sine, 10 levels--> FRFs --LSCF--> simulated omega2, zeta per level
+    --estimate (paper, exact, amplitude)--> on the measured AND on the simulated data
+
+(settings and their reasons: :mod:`cases.double_beam.settings`; the joint:
+:mod:`cases.double_beam.joint_setup`). :func:`cases.double_beam.study.run_study` adds the
+weak-joint reruns.
+"""
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from cases.double_beam.joint_setup import (
+    JointSetup,
+    force_scale_dependence,
+    joint_setup,
+    level_campaign,
+    mode_weights,
+    nonlinear_model,
+)
+from cases.double_beam.model import build_double_beam
+from cases.double_beam.report import DoubleBeamReport
+from cases.double_beam.settings import DoubleBeamStudy, measured_levels
+from ident.levels import identify_levels
+from ident.measured import MeasuredData
+from ident.modal_filter import modal_filter_levels
+from inverse.estimate import METHODS, estimate
+from inverse.iwan_modal import b_tilde, r_tilde
+
+__all__ = ["identify_campaign", "simulate_study"]
+
+
+def identify_campaign(model, setup: JointSetup, study: DoubleBeamStudy, res, phi, weights,
+                      progress=None):
+    """Per-level modal data of a finished campaign ``res``: LSCF at the response DOF
+    (:func:`ident.levels.identify_levels`, the study's options) and the modal filter of
+    every DOF (:func:`ident.modal_filter.modal_filter_levels`). ``phi``, ``weights``:
+    :func:`cases.double_beam.joint_setup.mode_weights`;
+    ``progress``: tqdm bar or None (one tick per identified level).
+
+    Returns
+    -------
+    (LevelIdentification, ModalFilterLevels)
+    """
+    ident = identify_levels(study.lines, res.receptance[:, :, int(model.response_dof)],
+                            res.slip_amplitude, setup.force, study.band_hz,
+                            setup.omega_n / (2 * math.pi), weights,
+                            options=study.identify_options, progress=progress)
+    mf = modal_filter_levels(study.lines, res.receptance, model.M, phi, model.drive_dof,
+                             setup.omega_n, 2 * setup.zeta_viscous * setup.omega_n,
+                             res.slip_amplitude, model.slip_matrix, setup.shares, setup.R,
+                             setup.chi)
+    return ident, mf
+
+
+def _estimate_all(data, study, model, amplitude, slip_level1, phi, shares) -> dict:
+    """Estimates of every method on ``data``; B~ and R~ from the linear inverse (the
+    estimator's) and from the simulated level-1 slips at resonance."""
+    out = {}
+    for method in METHODS:
+        kw = {"amplitude": amplitude} if method == "amplitude" else {}
+        try:
+            e = estimate(data, fit_levels=study.fit, method=method, model=model,
+                         force_scale=study.force_scale, **kw)
+        except ValueError as exc:
+            out[method] = str(exc)
+            continue
+        B_sim = b_tilde(model.slip_matrix, phi, slip_level1, e.chi, shares)
+        out[method] = (e, B_sim, r_tilde(e.kappa1_B, e.chi, B_sim))
+    return out
+
+
+def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
+                   workers: int = 1, model=None, executor=None) -> DoubleBeamReport:
+    """One simulation of the study (module docstring), without the weak-joint reruns.
+
+    Parameters
+    ----------
+    study : DoubleBeamStudy
+    store : path, optional
+        Parent directory of the resumable campaign store ``campaign-hb-<hash12>``
+        (:func:`runs.stepped_sine.run_campaign`): finished levels are loaded, not recomputed.
+    progress : bool
+        tqdm bars on stderr.
+    workers : int
+        Without ``executor``: levels computed in that many local processes.
+    model : cases.double_beam.model.DoubleBeamModel, optional
+        Default: :func:`cases.double_beam.model.build_double_beam` (the shipped case).
+    executor : str or runs.executor.ExecutorSpec, optional
+        Where the levels run (:func:`runs.stepped_sine.run_campaign`); results are bitwise
+        the same. A local cluster or pool is started per campaign.
+
+    Returns
+    -------
+    DoubleBeamReport
+    """
+    from runs.stepped_sine import campaign_hash, run_campaign
+
+    timings = {}
+    t0 = time.perf_counter()
+    model = build_double_beam() if model is None else model
+    data = measured_levels(study)
+    setup = joint_setup(model, data, study)
+    red, bank = nonlinear_model(model, setup, study)
+    timings["setup"] = time.perf_counter() - t0
+
+    camp = level_campaign(model, setup, study)
+    store_dir = None
+    if store is not None:
+        store_dir = Path(store) / f"campaign-hb-{campaign_hash(red, bank, camp)[:12]}"
+    t0 = time.perf_counter()
+    res = run_campaign(red, bank, camp, store=store_dir, progress=progress,
+                       workers=None if executor is not None else workers, executor=executor)
+    timings["campaign"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    phi, weights = mode_weights(model, setup)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=study.n_levels, desc="identify", unit="level", leave=False)
+    try:
+        ident, mf = identify_campaign(model, setup, study, res, phi, weights, progress=bar)
+    finally:
+        if bar is not None:
+            bar.close()
+    if not np.all(np.isfinite(ident.omega2)):
+        bad = data.level[~np.isfinite(ident.omega2)]
+        raise RuntimeError(f"no mode identified near {setup.omega_n / (2 * math.pi):.1f} Hz at "
+                           f"simulated level(s) {', '.join(map(str, bad))}")
+
+    def as_data(om2, ze, slip, source):
+        return MeasuredData(
+            level=data.level, excitation=data.excitation, omega2=om2, zeta=ze,
+            mode=data.mode, run_order=data.run_order,
+            response_amplitude=ident.response if source == "lscf" else None,
+            extra={"x_force_N": setup.force, "x_joint_slip_eff_m": slip @ weights / weights.sum(),
+                   "x_slip_over_phi_max": np.nanmax(slip, axis=1) / setup.phi_max},
+            source=f"simulated double beam ({source})")
+
+    simulated = as_data(ident.omega2, ident.zeta, ident.slip, "lscf")
+    filtered = as_data(mf.omega2, mf.zeta, mf.slip, "modal filter")
+    timings["identification"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    est_m = _estimate_all(data, study, model, ident.slip_eff, ident.slip[0], phi, setup.shares)
+    est_s = _estimate_all(simulated, study, model, ident.slip_eff, ident.slip[0], phi,
+                          setup.shares)
+    eff_mf = mf.slip @ weights / weights.sum()
+    est_f = (_estimate_all(filtered, study, model, eff_mf, mf.slip[0], phi, setup.shares)
+             if np.all(np.isfinite(mf.zeta)) else {})
+    top = float(np.nanmax(ident.slip[-1]))
+    fs_rows = force_scale_dependence(model, data, study, top_slip=top)
+    timings["estimation"] = time.perf_counter() - t0
+    return DoubleBeamReport(study=study, setup=setup, measured=data, simulated=simulated,
+                            campaign=res, identification=ident, modal_filter=mf,
+                            estimates_measured=est_m, estimates_simulated=est_s,
+                            estimates_filtered=est_f, force_scale_rows=fs_rows,
+                            weak_joint_rows=[],
+                            store=None if store_dir is None else str(store_dir),
+                            timings=timings, sliders_per_joint=int(bank.n_sliders),
+                            response_dof=int(model.response_dof))

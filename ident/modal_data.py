@@ -1,0 +1,128 @@
+"""Amplitude-dependent modal data in memory: one entry per (mode, level).
+
+The table of ``shared/spec/measured-data.md`` as arrays; :mod:`ident.measured` reads and
+writes it as CSV, :mod:`ident.tracking` builds it from identified levels. SI units:
+``omega2`` in rad^2/s^2, ``zeta`` as a fraction.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+
+@dataclass
+class MeasuredData:
+    """Amplitude-dependent modal data, one entry per (mode, level), in file order.
+
+    Attributes
+    ----------
+    level, mode, run_order : ndarray of int
+    excitation : ndarray of float
+        Excitation amplitude (unit proportional to force).
+    omega2 : ndarray of float
+        Undamped natural frequency squared, rad^2/s^2.
+    zeta : ndarray of float
+        Damping ratio (fraction).
+    response_amplitude : ndarray of float or None
+        Response amplitude at resonance, or None if the file has no such column.
+    omega2_std, zeta_std : ndarray of float or None
+        Standard uncertainties of ``omega2`` (rad^2/s^2) and ``zeta`` from the
+        identification, or None.
+    control : ndarray of str
+        ``"force"`` or ``"response"`` per entry (what the level held constant).
+    extra : dict[str, ndarray]
+        ``x_*`` annotation columns: float arrays where every value is numeric, else
+        str arrays.
+    warnings : list[str]
+        Non-fatal findings (percent-looking zeta, non-constant excitation ratios).
+    line : ndarray of int
+        1-based line number of each entry in the source file (0 if not from a file).
+    source : str
+        The file name the data came from ("" if built in memory).
+    """
+
+    level: np.ndarray
+    excitation: np.ndarray
+    omega2: np.ndarray
+    zeta: np.ndarray
+    mode: np.ndarray
+    run_order: np.ndarray
+    response_amplitude: np.ndarray | None = None
+    omega2_std: np.ndarray | None = None
+    zeta_std: np.ndarray | None = None
+    control: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+    line: np.ndarray | None = None
+    source: str = ""
+
+    def __post_init__(self):
+        self.level = np.asarray(self.level, dtype=int)
+        n = self.level.size
+        self.excitation = np.asarray(self.excitation, dtype=float)
+        self.omega2 = np.asarray(self.omega2, dtype=float)
+        self.zeta = np.asarray(self.zeta, dtype=float)
+        self.mode = np.asarray(self.mode, dtype=int) if self.mode is not None else np.ones(n, int)
+        self.run_order = (np.asarray(self.run_order, dtype=int)
+                          if self.run_order is not None else self.level.copy())
+        for name in ("response_amplitude", "omega2_std", "zeta_std"):
+            if getattr(self, name) is not None:
+                setattr(self, name, np.asarray(getattr(self, name), dtype=float))
+        self.control = (np.full(n, "force") if self.control is None
+                        else np.asarray(self.control, dtype=str))
+        self.line = np.zeros(n, int) if self.line is None else np.asarray(self.line, dtype=int)
+        self.extra = {k: np.asarray(v) for k, v in self.extra.items()}
+        arrays = [self.excitation, self.omega2, self.zeta, self.mode, self.run_order,
+                  self.line, self.control, *self.extra.values()]
+        arrays += [a for a in (self.response_amplitude, self.omega2_std, self.zeta_std)
+                   if a is not None]
+        if any(a.shape != (n,) for a in arrays):
+            raise ValueError("MeasuredData: all columns must be 1-D arrays of equal length")
+
+    def __len__(self) -> int:
+        return int(self.level.size)
+
+    @property
+    def modes(self) -> np.ndarray:
+        """Sorted distinct mode labels."""
+        return np.unique(self.mode)
+
+    @property
+    def omega_hz(self) -> np.ndarray:
+        """Undamped natural frequency sqrt(omega2)/(2 pi), Hz."""
+        return np.sqrt(self.omega2) / (2.0 * np.pi)
+
+    @property
+    def response_controlled(self) -> bool:
+        """True when every entry held a constant response amplitude (``control``)."""
+        return bool(len(self)) and bool(np.all(self.control == "response"))
+
+    @property
+    def held_amplitude(self) -> np.ndarray:
+        """The amplitude each level held: ``response_amplitude`` under response control,
+        else ``excitation`` (the abscissa of the estimator and the diagnosis)."""
+        return self.response_amplitude if self.response_controlled else self.excitation
+
+    def take(self, index) -> "MeasuredData":
+        """Entries selected by an index or boolean mask (warnings are kept)."""
+        index = np.asarray(index)
+
+        def opt(a):
+            return None if a is None else a[index]
+
+        return replace(
+            self, level=self.level[index], excitation=self.excitation[index],
+            omega2=self.omega2[index], zeta=self.zeta[index], mode=self.mode[index],
+            run_order=self.run_order[index], response_amplitude=opt(self.response_amplitude),
+            omega2_std=opt(self.omega2_std), zeta_std=opt(self.zeta_std),
+            control=self.control[index],
+            extra={k: v[index] for k, v in self.extra.items()}, line=self.line[index],
+            warnings=list(self.warnings))
+
+    def for_mode(self, m: int) -> "MeasuredData":
+        """Entries of mode ``m`` sorted by level; ValueError if the mode is absent."""
+        idx = np.flatnonzero(self.mode == int(m))
+        if idx.size == 0:
+            raise ValueError(f"mode {m} not in data (modes: {', '.join(map(str, self.modes))})")
+        return self.take(idx[np.argsort(self.level[idx], kind="stable")])

@@ -1,0 +1,105 @@
+"""One mode followed across excitation levels: matching identified modes of successive
+levels (frequency and MAC) and the measured-data table built from them."""
+from __future__ import annotations
+
+import numpy as np
+
+from ident.identify import IdentifiedMode
+from ident.measured import MeasuredData
+from ident.poles import mac
+
+MATCH_FREQ = 0.05
+MATCH_MAC = 0.8
+
+
+def match_modes(previous: list, current: list) -> list:
+    """Match modes of successive levels by frequency and (several points) MAC.
+
+    Cost ``|f_a - f_b| / f_a + (1 - MAC)`` minimized by the Hungarian assignment; a pair
+    is accepted when frequencies differ by < 5 % and (several points) MAC >= 0.8.
+
+    Returns
+    -------
+    list, for each mode of ``current``, the index into ``previous`` or -1.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    out = [-1] * len(current)
+    if not previous or not current:
+        return out
+    fa = np.array([m.frequency_hz for m in previous])
+    fb = np.array([m.frequency_hz for m in current])
+    df = np.abs(fb[None, :] - fa[:, None]) / fa[:, None]
+    several = np.size(previous[0].shape) > 1 and all(
+        np.size(m.shape) == np.size(previous[0].shape) for m in current)
+    macs = (mac(np.stack([m.shape for m in previous], 1), np.stack([m.shape for m in current], 1))
+            if several else np.ones_like(df))
+    cost = df + (1.0 - macs)
+    rows, cols = linear_sum_assignment(cost)
+    for i, j in zip(rows, cols):
+        if df[i, j] < MATCH_FREQ and macs[i, j] >= MATCH_MAC:
+            out[j] = int(i)
+    return out
+
+
+def modal_data_from_levels(excitation, results, run_order=None, sources=None):
+    """Measured-data table (``shared/spec/measured-data.md``) from identified levels.
+
+    Parameters
+    ----------
+    excitation : (L,) excitation amplitude of each FRF set (distinct, > 0).
+    results : list of L lists of IdentifiedMode.
+    run_order : (L,) chronological order (default 1..L in the given order).
+    sources : list of L file names for the ``x_source`` annotation.
+
+    Levels are numbered by increasing excitation; modes are labelled 1, 2, ... at the
+    lowest level (by frequency) and followed to the next level by :func:`match_modes`;
+    a mode without a match gets a new label. Annotations: ``x_frequency_hz``,
+    ``x_stability`` and ``x_mac`` (MAC with the same mode one level below; NaN at its
+    first level or with one response point).
+
+    Returns
+    -------
+    ident.measured.MeasuredData
+    """
+    excitation = np.asarray(excitation, float)
+    L = excitation.size
+    if len(results) != L:
+        raise ValueError("one result per excitation level is needed")
+    if np.any(~np.isfinite(excitation) | (excitation <= 0)):
+        raise ValueError("excitation levels must be finite and > 0")
+    sort = np.argsort(excitation, kind="stable")
+    if np.any(np.diff(excitation[sort]) <= 0):
+        raise ValueError("two FRF sets have the same excitation level: "
+                         + ", ".join(f"{e:g}" for e in excitation[sort]))
+    run_order = np.arange(1, L + 1) if run_order is None else np.asarray(run_order, int)
+    sources = [""] * L if sources is None else list(sources)
+    rows = []
+    last: dict[int, IdentifiedMode] = {}   # label -> latest mode
+    next_label = 1
+    for level, k in enumerate(sort, start=1):
+        modes = sorted(results[k], key=lambda m: m.frequency_hz)
+        labels = list(last)
+        match = match_modes([last[lab] for lab in labels], modes)
+        for mode, j in zip(modes, match):
+            if j >= 0:
+                lab = labels[j]
+                prev = last[lab]
+                m = (float(mac(prev.shape, mode.shape)[0, 0])
+                     if np.size(mode.shape) > 1 and np.size(prev.shape) == np.size(mode.shape)
+                     else float("nan"))
+            else:
+                lab, m = next_label, float("nan")
+                next_label += 1
+            rows.append((level, excitation[k], mode.omega2, mode.zeta, lab, run_order[k],
+                         mode.frequency_hz, mode.stability, m, sources[k]))
+            last[lab] = mode
+    if not rows:
+        raise ValueError("no mode identified at any level")
+    cols = list(zip(*rows))
+    return MeasuredData(level=cols[0], excitation=cols[1], omega2=cols[2], zeta=cols[3],
+                        mode=cols[4], run_order=cols[5],
+                        extra={"x_frequency_hz": np.array(cols[6], float),
+                               "x_stability": np.array(cols[7], float),
+                               "x_mac": np.array(cols[8], float),
+                               "x_source": np.array(cols[9], dtype=str)})

@@ -1,0 +1,160 @@
+"""The wheel built by ``pip wheel .``: it holds every package and module of the source
+tree and the shipped data files, the build prints no setuptools warning about packages
+absent from the configuration, and, installed in a fresh virtual environment, its
+``iwanfe`` command runs from there.
+
+Truth: the source tree itself (every folder with ``__init__.py``, every module, the files
+of ``cases/data``) and, for the installed command, the closed form of the four-parameter
+Iwan joint (Segalman 2005: phi_max, R, S, micro-slip dissipation
+``4 R A^(chi+3) / ((chi+2)(chi+3))``) with the in-phase first harmonic integrated by
+quadrature over the sliders, each an elastic-perfectly-plastic element whose
+first-harmonic stiffness is ``(theta - sin(2 theta)/2) / pi``, ``cos theta = 1 - 2 phi/A``
+(Caughey 1960): an integral the code under test does not compute this way.
+"""
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "cases", "cli", "viz")
+DATA_FILES = ("cases/data/double_beam_measured.csv", "cases/data/README.md")
+# setuptools' message when a folder holding shipped files is not a configured package
+ABSENT = re.compile(r"absent from the .?packages.? configuration|Package would be ignored")
+# what the build does not need: environments, build products, caches, outputs
+IGNORE = shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info", "results",
+                                "__pycache__", "*.pyc", ".pytest_cache", ".hypothesis")
+
+
+def _build_deps_present() -> bool:
+    """setuptools >= 77 (PEP 639 license field) and wheel importable here."""
+    if importlib.util.find_spec("wheel") is None:
+        return False
+    try:
+        import setuptools
+    except ImportError:
+        return False
+    return int(setuptools.__version__.split(".")[0]) >= 77
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    """Wheel built from a copy of the source tree (no stale build/ of an earlier build can
+    leak into it); returns (path, build log)."""
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = tmp / "src"
+    shutil.copytree(ROOT, src, ignore=IGNORE)
+    cmd = [sys.executable, "-m", "pip", "wheel", str(src), "--no-deps", "-v",
+           "-w", str(tmp / "dist")]
+    if _build_deps_present():
+        cmd.append("--no-build-isolation")
+    run = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    log = run.stdout + run.stderr
+    assert run.returncode == 0, log[-3000:]
+    (path,) = (tmp / "dist").glob("iwanfe-*.whl")
+    return path, log
+
+
+def _source_files():
+    """Every module of the packages (relative posix paths) and the package folders."""
+    modules, packages = set(), set()
+    for top in PACKAGES:
+        for f in (ROOT / top).rglob("*.py"):
+            if "__pycache__" in f.parts:
+                continue
+            modules.add(f.relative_to(ROOT).as_posix())
+            if f.name == "__init__.py":
+                packages.add(f.parent.relative_to(ROOT).as_posix())
+    return modules, packages
+
+
+def test_wheel_holds_every_package_module_and_data_file(wheel):
+    path, _ = wheel
+    names = set(zipfile.ZipFile(path).namelist())
+    modules, packages = _source_files()
+    assert set(PACKAGES) <= packages and "cli/commands" in packages
+    missing_packages = sorted(p for p in packages if f"{p}/__init__.py" not in names)
+    assert not missing_packages, f"packages not in the wheel: {missing_packages}"
+    missing_modules = sorted(modules - names)
+    assert not missing_modules, f"modules not in the wheel: {missing_modules}"
+    missing_data = sorted(set(DATA_FILES) - names)
+    assert not missing_data, f"data files not in the wheel: {missing_data}"
+    # and nothing else: no module absent from the tree, no stray folder
+    extra = sorted(n for n in names if not n.startswith("iwanfe-")
+                   and n not in modules and n not in DATA_FILES)
+    assert not extra, f"files in the wheel that the source tree does not ship: {extra}"
+
+
+def test_build_prints_no_absent_package_warning(wheel):
+    _, log = wheel
+    hits = [line.strip() for line in log.splitlines() if ABSENT.search(line)]
+    assert not hits, "setuptools warns:\n" + "\n".join(hits)
+
+
+def _iwan_closed_form(chi, K_T, F_S, beta, A):
+    """Segalman (2005) parameters and the micro-slip first harmonic (A < phi_max)."""
+    c = beta + (chi + 1.0) / (chi + 2.0)
+    phi_max = F_S * (1.0 + beta) / (K_T * c)
+    R = F_S * (chi + 1.0) / (phi_max ** (chi + 2.0) * c)
+    S = F_S * beta / (phi_max * c)
+    D = 4.0 * R * A ** (chi + 3.0) / ((chi + 2.0) * (chi + 3.0))
+
+    def lost(x):      # stiffness an element of slip force x A loses: 1 - (th - sin 2th/2)/pi
+        th = np.arccos(1.0 - 2.0 * x)
+        return 1.0 - (th - 0.5 * np.sin(2.0 * th)) / np.pi
+
+    # sliders of slip force phi = x A < A slip, density R phi^chi: weight x^chi
+    integral = quad(lost, 0.0, 1.0, weight="alg", wvar=(chi, 0.0), epsabs=0, epsrel=1e-13)[0]
+    k_in = K_T - R * A ** (chi + 1.0) * integral
+    return {"phi_max": phi_max, "R": R, "S": S, "dissipation_per_cycle": D,
+            "stiffness_quadrature": D / (np.pi * A ** 2), "stiffness_in_phase": k_in}
+
+
+@pytest.mark.slow
+def test_installed_wheel_runs_joint_command(wheel):
+    """Fresh venv, ``pip install <wheel>`` (dependencies from the pip cache or the index),
+    then the installed ``iwanfe joint`` against the closed form (about 30-40 s)."""
+    path, _ = wheel
+    chi, K_T, F_S, beta, A = -0.5, 1.1e5, 400.0, 4.0, 1e-3
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    with tempfile.TemporaryDirectory(prefix="iwanfe-venv-") as tmp:
+        venv = Path(tmp) / "venv"
+        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=120)
+        py = venv / "bin" / "python"
+        inst = subprocess.run([str(py), "-m", "pip", "install", "-q", str(path)], env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert inst.returncode == 0, (inst.stdout + inst.stderr)[-3000:]
+        # imports resolve to the installed copy and the data file ships with it
+        where = subprocess.run(
+            [str(py), "-c", "import cases.paper_data as p, fe; "
+             "print(fe.__file__); print(p.DATA_FILE.is_file())"],
+            cwd=tmp, env=env, capture_output=True, text=True, timeout=120, check=True)
+        fe_file, data_ok = where.stdout.split()
+        assert Path(fe_file).is_relative_to(venv), fe_file
+        assert data_ok == "True"
+        run = subprocess.run(
+            [str(venv / "bin" / "iwanfe"), "joint", "--chi", str(chi), "--kt", str(K_T),
+             "--fs", str(F_S), "--beta", str(beta), "--amplitude", str(A), "--json"],
+            cwd=tmp, env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    out = json.loads(run.stdout)
+    truth = _iwan_closed_form(chi, K_T, F_S, beta, A)
+    for key in ("phi_max", "R", "S"):
+        assert out[key] == pytest.approx(truth[key], rel=1e-12), key
+    (amp,) = out["amplitudes"]
+    assert amp["amplitude"] == A and amp["regime"] == "micro"
+    for key in ("dissipation_per_cycle", "stiffness_quadrature"):
+        assert amp[key] == pytest.approx(truth[key], rel=1e-12), key
+    assert amp["stiffness_in_phase"] == pytest.approx(truth["stiffness_in_phase"], rel=1e-9)

@@ -1,0 +1,70 @@
+"""The case registry (cases/registry.py): every shipped case builds the duck-typed FE
+model the estimator takes, its modes agree with a dense generalized eigen-solution,
+and unknown names are one-line errors on every command that takes ``--case``."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from cases.registry import CASES, MEASURED_DATA, build_case, case_modes, mode_table
+from cli.main import main
+from ident.errors import InputError
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_case_model_has_the_estimator_interface_and_its_modes(name):
+    model = build_case(name)
+    n = model.M.shape[0]
+    assert model.K.shape == (n, n)
+    assert model.slip_matrix.shape[1] == n
+    assert len(model.joint_stiffness) == model.slip_matrix.shape[0]
+    assert 0 <= int(model.drive_dof) < n
+    freqs, shapes = case_modes(model, 4)
+    assert shapes.shape == (n, 4)
+    # each pair solves K phi = omega^2 M phi, mass-normalized (residuals ~1e-6 of K phi:
+    # the stiff normal springs of the joints make K ill-conditioned)
+    K, M = model.K.toarray(), model.M.toarray()
+    w2 = (2 * np.pi * freqs) ** 2
+    resid = K @ shapes - M @ shapes * w2
+    assert np.all(np.linalg.norm(resid, axis=0) <= 1e-5 * np.linalg.norm(K @ shapes, axis=0))
+    np.testing.assert_allclose(np.einsum("ij,ik,kj->j", shapes, M, shapes), 1.0, rtol=1e-8)
+    # and they are the lowest four: dense generalized eigenvalues (a second method)
+    lam = sla.eigh(K, M, eigvals_only=True)[:4]
+    np.testing.assert_allclose(freqs, np.sqrt(lam) / (2 * np.pi), rtol=1e-5)
+
+
+def test_case_modes_refuses_more_modes_than_dofs():
+    model = build_case(CASES[0])
+    with pytest.raises(ValueError, match="degrees of freedom"):
+        case_modes(model, model.M.shape[0] + 1)
+    with pytest.raises(ValueError, match=">= 1"):
+        case_modes(model, 0)
+
+
+@pytest.mark.parametrize("call", [build_case, mode_table])
+def test_unknown_case_is_an_input_error_naming_the_known_ones(call):
+    with pytest.raises(InputError, match="unknown case 'lumped'; known: double-beam"):
+        call("lumped")
+
+
+def test_every_measured_data_case_is_a_model_case():
+    assert set(MEASURED_DATA) <= set(CASES)
+    for path in MEASURED_DATA.values():
+        assert path.exists()
+
+
+@pytest.mark.parametrize("argv", [
+    ["modes", "--case", "lumped"],
+    ["estimate", str(MEASURED_DATA["double-beam"]), "--case", "lumped"],
+    ["render", "--case", "lumped", "--mode", "1", "--out", "x.png"],
+    ["export", "--case", "lumped", "--out", "x.vtu"],
+])
+def test_cli_unknown_case_exits_2_with_one_line(argv, capsys):
+    try:  # argparse refuses a name outside --case choices by exiting
+        code = main(argv)
+    except SystemExit as exc:
+        code = exc.code
+    assert code == 2
+    _, err = capsys.readouterr()
+    assert err.count("\n") == 1 and "lumped" in err
