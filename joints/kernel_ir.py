@@ -16,7 +16,7 @@ from llvmlite import ir as _ir
 from numba import njit, types as _nbtypes
 from numba.extending import intrinsic as _intrinsic
 
-from joints.kernel_reference import INTERLEAVE, KERNEL_STAMP, LANES
+from joints.kernel_reference import INTERLEAVE, KERNEL_STAMP, LANES, slider_return_mapping
 
 __all__ = ["ir_bank_update"]
 
@@ -160,7 +160,7 @@ def _simd_blocks(typingctx, s, x, phi, k, ix, ip, ik, n):
 
     return sig, codegen
 
-@njit(cache=True, inline="always")
+@njit(inline="always")     # only ever inlined into ir_bank_update: nothing to cache
 def _row_in_place(s, x, j, k, rk, phi, rp):
     """Return mapping of joint ``j``'s sliders, committed into ``x[j]``; returns
     (force, tangent): the blocks of 8 and 4 by :func:`_simd_blocks`, the n mod 4
@@ -169,15 +169,10 @@ def _row_in_place(s, x, j, k, rk, phi, rp):
     f_tail = 0.0
     t_tail = 0.0
     for i in range(n - n % (LANES // 2), n):
-        xi = x[j, i]
-        p = phi[rp, i]
-        lo = s - p
-        hi = s + p
-        y = lo if lo > xi else xi
-        y = hi if hi < y else y
+        y, f_term, t_term = slider_return_mapping(s, x[j, i], phi[rp, i], k[rk, i])
         x[j, i] = y
-        f_tail += (s - y) * k[rk, i]
-        t_tail += k[rk, i] if y == xi else 0.0
+        f_tail += f_term
+        t_tail += t_term
     f, t = _simd_blocks(s, x, phi, k, j * n, rp * n, rk * n, n)
     return f + f_tail, t + t_tail
 

@@ -3,10 +3,13 @@
 :func:`bank_update_reference` is the return mapping of a bank of Jenkins elements
 (paper eq. 2 over one step) written as a plain loop, with the force and tangent sums
 taken in the fixed order of the compiled kernel (:mod:`joints.kernel_ir`, comment
-below). It needs neither numba nor llvmlite, so it is the truth the compiled kernel is
-checked against bit for bit (:func:`joints.kernel.compiled_kernel` at its first use,
-``tests/test_jenkins_kernel.py``), and, compiled by numba, the fallback that keeps the
-solvers working, with the same numbers, when the hand-written IR cannot be used.
+below). It runs as plain Python and uses no hand-written IR and no numba internals
+(its one-slider step :func:`slider_return_mapping`, shared with the IR kernel's last
+sliders, is registered with numba's public ``register_jitable``), so it is the truth
+the compiled kernel is checked against bit for bit (:func:`joints.kernel.compiled_kernel`
+at its first use, ``tests/test_jenkins_kernel.py``), and, compiled by numba, the
+fallback that keeps the solvers working, with the same numbers, when the hand-written
+IR cannot be used.
 
 :data:`KERNEL_STAMP` is a hash of the kernel's source files: the on-disk numba cache of
 every function that compiles the kernel in is keyed by it (:mod:`joints.kernel`).
@@ -17,8 +20,10 @@ import hashlib
 from pathlib import Path
 
 import numpy as np
+from numba.extending import register_jitable
 
-__all__ = ["LANES", "INTERLEAVE", "bank_update_reference", "KERNEL_STAMP"]
+__all__ = ["LANES", "INTERLEAVE", "slider_return_mapping", "bank_update_reference",
+           "KERNEL_STAMP"]
 
 # For each joint j and slider i (paper eq. 2 over one step, a return mapping)::
 #
@@ -60,6 +65,20 @@ def _source_stamp() -> str:
 
 
 KERNEL_STAMP = _source_stamp()
+
+
+@register_jitable
+def slider_return_mapping(s, x, phi, k):
+    """One slider of stiffness ``k`` and slip limit ``phi`` at anchor ``x`` under slip
+    ``s``: its trial anchor ``y = clamp(x, s - phi, s + phi)`` (a NaN anchor stays NaN,
+    a NaN bound keeps ``x``), force term ``(s - y) k`` and tangent term (``k`` if it
+    sticks, ``y == x``, else 0). Plain Python, and callable from numba-compiled code
+    (the IR kernel's last sliders)."""
+    lo = s - phi
+    hi = s + phi
+    y = lo if lo > x else x
+    y = hi if hi < y else y
+    return y, (s - y) * k, (k if y == x else 0.0)
 
 
 def bank_update_reference(slip, anchor, stiffness, slip_limit, out_anchor, force, tangent):
@@ -105,16 +124,9 @@ def bank_update_reference(slip, anchor, stiffness, slip_limit, out_anchor, force
         f_tail = 0.0
         t_tail = 0.0
         for i in range(n):
-            x = anchor[j, i]
-            p = slip_limit[rp, i]
-            lo = s - p
-            hi = s + p
-            y = lo if lo > x else x
-            y = hi if hi < y else y
+            y, f_term, t_term = slider_return_mapping(s, anchor[j, i], slip_limit[rp, i],
+                                                      stiffness[rk, i])
             out_anchor[j, i] = y
-            k = stiffness[rk, i]
-            f_term = (s - y) * k
-            t_term = k if y == x else 0.0
             b = i // LANES
             if b < n_blocks:        # interleaved pairs, then a last odd block into 0
                 u = b % INTERLEAVE if b < n_paired else 0
