@@ -30,7 +30,7 @@ viscous damping ``c = 2 (0.005) sqrt(K_T m)`` (0.5 % of critical, stuck), driven
     over the lines of a sweep, then median over ``--repeats`` interleaved sweeps.
 
 (b) Newmark per step, 100 sliders, at the resonance of the 0.5 phi_max level, 256
-    steps per period (frequency pre-warped, :mod:`runs.stepped_sine`):
+    steps per period (frequency pre-warped, :mod:`runs.campaign`):
 
     - ``compiled loop``: :class:`fe.newmark.NewmarkIntegrator` (``@njit`` loop on
       :func:`joints.kernel.bank_update_kernel`), 600 periods in one call;
@@ -245,7 +245,7 @@ def section_newmark(args, mass, c, model, bank):
     A0 = 0.5 * JOINT.phi_max
     P, w_r, _, _ = level_setup(A0, mass, c, 3)
     N = STEPS_PER_PERIOD
-    w_drive = w_r * np.pi / (N * np.tan(np.pi / N))       # pre-warped (runs.stepped_sine)
+    w_drive = w_r * np.pi / (N * np.tan(np.pi / N))       # pre-warped (runs.campaign)
     dt = 2 * np.pi / (w_drive * N)
     settings = NewmarkSettings(dt=dt)
     load = model.load(np.array([P]))

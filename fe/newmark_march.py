@@ -1,4 +1,4 @@
-"""The step loops of the HHT/Newmark integrator (:mod:`fe.newmark`): compiled and reference.
+"""The step loops of the HHT/Newmark integrator (:mod:`fe.newmark`), compiled and plain.
 
 :func:`march` is the compiled loop: the joints' return mapping is
 :func:`joints.kernel.bank_update_kernel`, so its joint forces and slider states are
@@ -22,7 +22,7 @@ __all__ = ["march", "reference_loop"]
 
 
 def reference_loop(st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, G, K_T,
-                    k_sl, phi_sl, tol, max_iter, slip_scale, record_force, fric):
+                   k_sl, phi_sl, tol, max_iter, slip_scale, record_force, fric):
     """Python step loop over :func:`joints.jenkins.jenkins_update` (reference; the
     arguments are :meth:`fe.newmark.NewmarkIntegrator.run`'s operators)."""
     n_steps = e.size - 1

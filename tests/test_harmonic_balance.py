@@ -1,4 +1,4 @@
-"""Harmonic balance with AFT Jenkins joints (fe.harmonic_balance)."""
+"""Harmonic balance with AFT Jenkins joints (fe.harmonic_balance, fe.aft)."""
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -56,7 +56,7 @@ def test_aft_jacobian_matches_reference_and_finite_differences(lumped):
 def test_single_harmonic_sdof_equals_describing_function_solution():
     """Mass on a Iwan joint (in parallel with a spring), H = 1: the HB amplitude must
     solve |k + k_in(A) + i(w c + k_q(A)) - w^2 m| A = F with the continuous describing
-    function of joints.iwan (independent closed form), to the discretization error."""
+    function of joints.describing (independent closed form), to the discretization error."""
     p = IwanParameters(chi=-0.5, K_T=1e5, F_S=300.0, beta=2.0)
     mass, k, c, F = 1.0, 4e5, 20.0, 40.0
     s = JointedSystem(M=np.eye(1), K=np.array([[k]]), C=np.array([[c]]),
@@ -84,7 +84,7 @@ def test_hb_matches_newmark_steady_state(lumped):
     for f_hz in (61.0, 62.0):
         w = 2 * np.pi * f_hz
         sol = solve_hb(m, bank, load, w, HBSettings(n_harmonics=7, n_time=256))
-        # Newmark with pre-warped drive (see runs.stepped_sine), from rest, 400 periods
+        # Newmark with pre-warped drive (see runs.campaign), from rest, 400 periods
         wp = w * np.pi / (N * np.tan(np.pi / N))
         dt = 2 * np.pi / (wp * N)
         e = np.cos(wp * dt * np.arange(400 * N + 1))

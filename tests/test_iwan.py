@@ -1,6 +1,6 @@
-"""Exact four-parameter Iwan model (joints/iwan.py) against independent truths:
-quadrature of the density, quadrature of the Fourier integrals of the Masing loop,
-the paper's worked example (eq. 39, 41, 42), loop areas (shoelace) and a numerical
+"""Exact four-parameter Iwan model (joints/iwan.py, joints/describing.py) against
+independent truths: quadrature of the density, quadrature of the Fourier integrals of
+the Masing loop, the paper's worked example (eq. 39, 41, 42), loop areas (shoelace) and a numerical
 re-derivation of the paper's Taylor-series kappa2."""
 import math
 import warnings

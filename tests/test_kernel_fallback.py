@@ -185,7 +185,8 @@ with warnings.catch_warnings(record=True) as caught:
     out = solver_outputs()
 import joints.kernel as kernel
 out["kernel_is_reference"] = kernel.bank_update_kernel is kernel.reference_kernel
-out["warnings"] = [str(w.message) for w in caught if w.category.__name__ == "KernelFallbackWarning"]
+out["warnings"] = [str(w.message) for w in caught
+                   if w.category.__name__ == "KernelFallbackWarning"]
 print(json.dumps(out))
 """
 

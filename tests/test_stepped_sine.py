@@ -1,4 +1,5 @@
-"""Stepped-sine campaigns (runs.stepped_sine): protocols and resumable storage."""
+"""Stepped-sine campaigns (runs.campaign, runs.stepped_sine): protocols and resumable
+storage."""
 import json
 
 import numpy as np
