@@ -1,2 +1,3 @@
-"""Application layer: the studies (10-DOF lumped model, partially connected double
-beam), data readers, modal identification, the estimator, diagnosis and the CLI."""
+"""The studies: the paper's 10-DOF lumped model (``lumped10``) and the partially
+connected double beam (``double_beam``), each a small package; the registry of shipped
+cases, the paper's data and synthetic test series."""
