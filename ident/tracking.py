@@ -42,6 +42,59 @@ def match_modes(previous: list, current: list) -> list:
     return out
 
 
+def track_modes(held, results):
+    """Follow modes from level to level: levels by increasing held amplitude, labels.
+
+    Parameters
+    ----------
+    held : (L,) the amplitude each FRF set held (distinct, > 0): the excitation under
+        force control, the response amplitude under response control.
+    results : list of L lists of IdentifiedMode.
+
+    Modes are labelled 1, 2, ... at the lowest level (by frequency) and followed to the
+    next level by :func:`match_modes` against the latest mode of every label; a mode
+    without a match gets a new label.
+
+    Returns
+    -------
+    order : (L,) indices of ``results`` by increasing ``held`` (level = position + 1).
+    rows : list of (k, i, label, mac) in level order, ``results[k][i]`` being the mode;
+        ``mac`` with the same label's previous mode (NaN at its first level or with one
+        response point).
+    """
+    held = np.asarray(held, float)
+    L = held.size
+    if len(results) != L:
+        raise ValueError("one result per excitation level is needed")
+    if np.any(~np.isfinite(held) | (held <= 0)):
+        raise ValueError("excitation levels must be finite and > 0")
+    order = np.argsort(held, kind="stable")
+    if np.any(np.diff(held[order]) <= 0):
+        raise ValueError("two FRF sets have the same held level: "
+                         + ", ".join(f"{e:g}" for e in held[order]))
+    rows = []
+    last: dict[int, IdentifiedMode] = {}   # label -> latest mode
+    next_label = 1
+    for k in order:
+        idx = sorted(range(len(results[k])), key=lambda i: results[k][i].frequency_hz)
+        modes = [results[k][i] for i in idx]
+        labels = list(last)
+        match = match_modes([last[lab] for lab in labels], modes)
+        for i, mode, j in zip(idx, modes, match):
+            if j >= 0:
+                lab = labels[j]
+                prev = last[lab]
+                m = (float(mac(prev.shape, mode.shape)[0, 0])
+                     if np.size(mode.shape) > 1 and np.size(prev.shape) == np.size(mode.shape)
+                     else float("nan"))
+            else:
+                lab, m = next_label, float("nan")
+                next_label += 1
+            rows.append((int(k), i, lab, m))
+            last[lab] = mode
+    return order, rows
+
+
 def modal_data_from_levels(excitation, results, run_order=None, sources=None):
     """Measured-data table (``shared/spec/measured-data.md``) from identified levels.
 
@@ -52,54 +105,30 @@ def modal_data_from_levels(excitation, results, run_order=None, sources=None):
     run_order : (L,) chronological order (default 1..L in the given order).
     sources : list of L file names for the ``x_source`` annotation.
 
-    Levels are numbered by increasing excitation; modes are labelled 1, 2, ... at the
-    lowest level (by frequency) and followed to the next level by :func:`match_modes`;
-    a mode without a match gets a new label. Annotations: ``x_frequency_hz``,
-    ``x_stability`` and ``x_mac`` (MAC with the same mode one level below; NaN at its
-    first level or with one response point).
+    Levels are numbered by increasing excitation and modes followed by
+    :func:`track_modes`. Annotations: ``x_frequency_hz``, ``x_stability`` and ``x_mac``
+    (MAC with the same mode one level below; NaN at its first level or with one
+    response point). Series with response control, uncertainties and fit warnings:
+    :func:`ident.series.series_table`.
 
     Returns
     -------
     ident.measured.MeasuredData
     """
     excitation = np.asarray(excitation, float)
+    order, rows = track_modes(excitation, results)
     L = excitation.size
-    if len(results) != L:
-        raise ValueError("one result per excitation level is needed")
-    if np.any(~np.isfinite(excitation) | (excitation <= 0)):
-        raise ValueError("excitation levels must be finite and > 0")
-    sort = np.argsort(excitation, kind="stable")
-    if np.any(np.diff(excitation[sort]) <= 0):
-        raise ValueError("two FRF sets have the same excitation level: "
-                         + ", ".join(f"{e:g}" for e in excitation[sort]))
     run_order = np.arange(1, L + 1) if run_order is None else np.asarray(run_order, int)
     sources = [""] * L if sources is None else list(sources)
-    rows = []
-    last: dict[int, IdentifiedMode] = {}   # label -> latest mode
-    next_label = 1
-    for level, k in enumerate(sort, start=1):
-        modes = sorted(results[k], key=lambda m: m.frequency_hz)
-        labels = list(last)
-        match = match_modes([last[lab] for lab in labels], modes)
-        for mode, j in zip(modes, match):
-            if j >= 0:
-                lab = labels[j]
-                prev = last[lab]
-                m = (float(mac(prev.shape, mode.shape)[0, 0])
-                     if np.size(mode.shape) > 1 and np.size(prev.shape) == np.size(mode.shape)
-                     else float("nan"))
-            else:
-                lab, m = next_label, float("nan")
-                next_label += 1
-            rows.append((level, excitation[k], mode.omega2, mode.zeta, lab, run_order[k],
-                         mode.frequency_hz, mode.stability, m, sources[k]))
-            last[lab] = mode
     if not rows:
         raise ValueError("no mode identified at any level")
-    cols = list(zip(*rows))
-    return MeasuredData(level=cols[0], excitation=cols[1], omega2=cols[2], zeta=cols[3],
-                        mode=cols[4], run_order=cols[5],
-                        extra={"x_frequency_hz": np.array(cols[6], float),
-                               "x_stability": np.array(cols[7], float),
-                               "x_mac": np.array(cols[8], float),
-                               "x_source": np.array(cols[9], dtype=str)})
+    level_of = {int(k): n + 1 for n, k in enumerate(order)}
+    modes = [results[k][i] for k, i, _, _ in rows]
+    ks = [k for k, _, _, _ in rows]
+    return MeasuredData(level=[level_of[k] for k in ks], excitation=excitation[ks],
+                        omega2=[m.omega2 for m in modes], zeta=[m.zeta for m in modes],
+                        mode=[lab for _, _, lab, _ in rows], run_order=run_order[ks],
+                        extra={"x_frequency_hz": np.array([m.frequency_hz for m in modes]),
+                               "x_stability": np.array([m.stability for m in modes]),
+                               "x_mac": np.array([r[3] for r in rows], float),
+                               "x_source": np.array([sources[k] for k in ks], dtype=str)})
