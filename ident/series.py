@@ -1,30 +1,18 @@
-"""A stepped-sine series from its FRF files: one mode followed across levels, the table.
+"""A stepped-sine series from its FRF files: identification of every level, loading.
 
 ``shared/spec/measured-data.md``, "FRF files of a stepped-sine series". Each file is one
 level (:mod:`ident.frf_files`; its header says what the level held, ``control``,
 ``run_order``, the drive point). :func:`identify_series` identifies every level
 (:func:`ident.identify.identify`) and then makes the levels agree on the number of
-modes in the band: a level whose automatic selection found more modes than most levels
-(two poles on one resonance, typically at a level with little signal or a distorted
-force-controlled FRF) is identified again with the common number, and says so. Each
-mode gets the warnings of :mod:`ident.fit_quality` (fit error, stability, band
-sensitivity). :func:`series_table` follows the modes across levels
-(:func:`ident.tracking.track_modes`) and writes the measured-data table:
-
-* force control: ``excitation`` = the held level; ``response_amplitude`` = the
-  identified mode's amplitude at its resonance ``omega_d`` at the drive point,
-  ``|H_r(omega_d)| F``: the mode's own FRF (residue over pole and its conjugate) in the
-  file's quantity (m, m/s or m/s^2 per N) times the measured force there (the ``force``
-  column, interpolated) or else the held level;
-* response control: ``response_amplitude`` = the held level; ``excitation`` = the force
-  at resonance: the ``force`` column at ``omega_d``, else the held level over the
-  measured ``|H(omega_d)|`` (interpolated between lines).
-
-``omega2_std``/``zeta_std`` are the identification's (:mod:`ident.pole_uncertainty`);
-``x_fit_error`` and ``x_warning`` carry the fit warnings through a CSV round trip
-(:func:`ident.modal_data.annotation_warnings`). A track shorter than 4 levels beside
-longer ones is left out, with a note on the levels where it was seen.
-:func:`load_series` reads either a measured-data table or the FRF files of a series.
+modes in the band: a level whose automatic selection put two poles within one
+half-power width (with shapes alike) is identified again with one mode fewer
+(:func:`one_resonance`), and a level that found more modes than most levels (typically
+one with little signal or a force-controlled FRF the joint distorts) again with the
+common number; the level's warnings say so. Each mode gets the warnings of
+:mod:`ident.fit_quality` (fit error, stability, band sensitivity).
+:func:`ident.series_table.series_table` turns the levels into the measured-data table.
+:func:`load_series` reads either a measured-data table or the FRF files of a series
+(identified first): the input of ``iwanfe estimate`` and ``iwanfe diagnose``.
 """
 from __future__ import annotations
 
@@ -38,10 +26,8 @@ from ident.fit_quality import band_shift, mode_warnings
 from ident.frf_files import FRFSet, read_frf
 from ident.frf_header import with_overrides
 from ident.identify import identify
-from ident.modal_data import MeasuredData, annotation_warnings
-from ident.tracking import track_modes
-
-MIN_LEVELS = 4
+from ident.modal_data import MeasuredData
+from ident.series_table import series_table
 
 
 @dataclass
@@ -91,6 +77,14 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
         fits.append(LevelFit(s, q, s.control or "force",
                              _identify(s, q, band, n_modes, options)))
     notes = [[] for _ in fits]
+    if n_modes is None:
+        for k, f in enumerate(fits):
+            while len(f.result.modes) > 1 and one_resonance(f.result.modes):
+                found = ", ".join(f"{m.frequency_hz:.6g}" for m in f.result.modes)
+                f.result = _identify(f.frfset, f.quantity, band, len(f.result.modes) - 1,
+                                     options)
+                notes[k].append(f"two poles within one half-power width ({found} Hz) are "
+                                f"one resonance: identified with {len(f.result.modes)}")
     counts = np.array([len(f.result.modes) for f in fits])
     if n_modes is None and np.any(counts > 0):
         values, freq = np.unique(counts[counts > 0], return_counts=True)
@@ -113,104 +107,21 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
     return fits
 
 
-def drive_point(s: FRFSet) -> tuple[int, str | None]:
-    """Index of the drive point among the response points, and a note if it is a guess."""
-    if s.reference is not None and s.reference in s.points:
-        return s.points.index(s.reference), None
-    if len(s.points) == 1:
-        return 0, None
-    return 0, (f"drive point {s.reference!r} not among the response points: response "
-               f"amplitude taken at point {s.points[0]}")
+def one_resonance(modes) -> bool:
+    """True when two modes lie closer than the larger half-power half-width
+    ``zeta omega_n`` and (several points) their shapes agree (MAC >= 0.9): two poles
+    fitted to one resonance, which no level-to-level tracking can separate."""
+    from ident.poles import mac
 
-
-def mode_frf_at_resonance(mode, point: int, quantity: str) -> float:
-    """``|H_r(omega_d)|`` of one identified mode at a point, in the FRF's quantity per N:
-    ``A/(i w - lambda) + conj(A)/(i w - conj(lambda))`` at ``w = Im(lambda)``, times
-    ``w`` (mobility) or ``w^2`` (accelerance)."""
-    lam, a = complex(mode.pole), complex(np.atleast_1d(mode.shape)[point])
-    w = lam.imag
-    h = a / (1j * w - lam) + np.conj(a) / (1j * w - np.conj(lam))
-    power = {"receptance": 0, "mobility": 1, "accelerance": 2}[quantity]
-    return float(abs(h) * w ** power)
-
-
-def _amplitudes(f: LevelFit, mode):
-    """(excitation, response_amplitude, note) of one mode of one level (module doc)."""
-    s = f.frfset
-    p, note = drive_point(s)
-    f_d = mode.pole.imag / (2 * np.pi)
-    force = None if s.force is None else float(np.interp(f_d, s.freq_hz, s.force))
-    if f.control == "response":
-        if force is None:
-            force = s.excitation / float(np.interp(f_d, s.freq_hz, np.abs(s.frf[:, p])))
-        return force, s.excitation, note
-    amp = mode_frf_at_resonance(mode, p, f.quantity) * (s.excitation if force is None else force)
-    return s.excitation, amp, note
-
-
-def series_table(fits: list[LevelFit]) -> MeasuredData:
-    """The measured-data table of an identified series (module doc)."""
-    controls = {f.control for f in fits}
-    if len(controls) > 1:
-        raise InputError("the files mix control = force and response; one series has one "
-                         "control (give --control to override the files)")
-    missing = [f.frfset.source for f in fits if f.held is None]
-    if missing:
-        raise InputError(f"{missing[0]}: the level it held is unknown: give --excitation V "
-                         "per file, a CSV line '# excitation = V' or a UFF ID line "
-                         "'excitation=V'")
-    given = [f.frfset.run_order is not None for f in fits]
-    if any(given) and not all(given):
-        raise InputError(f"{fits[given.index(False)].frfset.source}: no run_order while "
-                         "other files state one; give all or none (--run-order)")
-    run_order = (np.array([f.frfset.run_order for f in fits]) if all(given)
-                 else np.arange(1, len(fits) + 1))
-    try:
-        order, rows = track_modes([f.held for f in fits], [f.result.modes for f in fits])
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
-    if not rows:
-        raise InputError("no mode identified at any level")
-    level_of = {int(k): n + 1 for n, k in enumerate(order)}
-    labels = np.array([r[2] for r in rows])
-    n_levels = {lab: int(np.sum(labels == lab)) for lab in set(labels.tolist())}
-    keep = np.array([n_levels[lab] >= MIN_LEVELS or max(n_levels.values()) < MIN_LEVELS
-                     for lab in labels])
-    out = {k: [] for k in ("level", "excitation", "omega2", "zeta", "mode", "response",
-                           "run", "w_std", "z_std", "f", "stab", "mac", "err", "src", "warn")}
-    dropped = [(r, n_levels[r[2]]) for r, ok in zip(rows, keep) if not ok]
-    for (k, i, lab, m), ok in zip(rows, keep):
-        if not ok:
-            continue
-        f = fits[k]
-        mode = f.result.modes[i]
-        exc, amp, note = _amplitudes(f, mode)
-        warn = list(f.warnings[i]) + ([note] if note else [])
-        warn += [f"a pole at {fits[kk].result.modes[ii].frequency_hz:.6g} Hz seen at "
-                 f"{n} level(s) only was left out" for (kk, ii, _, _), n in dropped if kk == k]
-        for key, v in zip(out, (level_of[k], exc, mode.omega2, mode.zeta, lab, amp,
-                                run_order[k], mode.omega2_std, mode.zeta_std,
-                                mode.frequency_hz, mode.stability, m, f.result.fit_error,
-                                Path(f.frfset.source).name, " | ".join(warn))):
-            out[key].append(v)
-    stds = np.array([out["w_std"], out["z_std"]], float)
-    has_std = bool(np.all(np.isfinite(stds) & (stds > 0)))
-    control = fits[0].control
-    data = MeasuredData(
-        level=out["level"], excitation=out["excitation"], omega2=out["omega2"],
-        zeta=out["zeta"], mode=out["mode"], run_order=out["run"],
-        response_amplitude=out["response"], omega2_std=stds[0] if has_std else None,
-        zeta_std=stds[1] if has_std else None, control=[control] * len(out["level"]),
-        extra={"x_frequency_hz": np.array(out["f"]), "x_stability": np.array(out["stab"]),
-               "x_mac": np.array(out["mac"], float), "x_fit_error": np.array(out["err"]),
-               "x_source": np.array(out["src"], dtype=str),
-               "x_warning": np.array(out["warn"], dtype=str)},
-        source="FRF series")
-    data.warnings = annotation_warnings(data)
-    if not has_std:
-        data.warnings.append("FRF series: no identification uncertainty at some level: "
-                             "omega2_std and zeta_std left out")
-    return data
+    for a in range(len(modes)):
+        for b in range(a + 1, len(modes)):
+            ma, mb = modes[a], modes[b]
+            half = max(ma.zeta * ma.frequency_hz, mb.zeta * mb.frequency_hz)
+            if abs(ma.frequency_hz - mb.frequency_hz) >= half:
+                continue
+            if np.size(ma.shape) < 2 or mac(ma.shape, mb.shape)[0, 0] >= 0.9:
+                return True
+    return False
 
 
 def is_frf_file(path) -> bool:

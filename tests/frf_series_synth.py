@@ -214,6 +214,7 @@ def planted_series(path, freqs_hz, zetas, held, control="response", seed=0, nois
     control the force column is ``held / |H|``, under force control it is ``held``.
     Returns the written paths."""
     rng = np.random.default_rng(seed)
+    Path(path).mkdir(parents=True, exist_ok=True)
     paths = []
     for k, (fn, z, a) in enumerate(zip(freqs_hz, zetas, held)):
         f = band_lines(fn, n_lines, step)

@@ -20,7 +20,8 @@ from frf_series_synth import (JointedChain, band_lines, noisy, planted_series, s
 from ident.errors import InputError
 from ident.identify import identify
 from ident.measured import read_measured, write_measured
-from ident.series import identify_series, load_series, read_series_sets, series_table
+from ident.series import identify_series, load_series, read_series_sets
+from ident.series_table import series_table
 from joints.iwan import IwanParameters
 
 F0 = 80.0   # Hz, the mode of the issue's bolted beam
@@ -190,14 +191,13 @@ def test_force_controlled_narrow_band_one_track_and_warnings(tmp_path, capsys):
 def test_two_poles_on_one_resonance_are_refitted_as_one(tmp_path):
     """A level whose automatic selection puts two poles on the one resonance (seeded
     noise on a force-controlled FRF; the precondition is asserted) is identified again
-    with the number of modes the other levels agree on: one track, and the level says
-    so in its warnings."""
+    with one pole: one track, and the level says so in its warnings."""
     w0 = 2 * np.pi * F0
     joint = IwanParameters(chi=-0.5, K_T=0.2 * w0 ** 2, F_S=0.2e-4 * w0 ** 2, beta=1.0)
     chain = JointedChain(m=[1.0], k=[0.8 * w0 ** 2], c=[2 * 0.005 * w0], joint=joint)
     paths, levels = write_series(tmp_path, chain, "force", np.geomspace(0.01, 0.3, 5), 8)
     f = levels[0].freq_hz
-    for seed in range(40):       # the lowest level, noisier: find a split realization
+    for seed in range(40):       # the lowest level: find a realization with two poles
         H, F = noisy(levels[0], np.random.default_rng(seed), 0.005, 1e-4)
         if len(identify(f, H).modes) == 2:
             break
@@ -206,10 +206,33 @@ def test_two_poles_on_one_resonance_are_refitted_as_one(tmp_path):
     write_level(paths[0], levels[0], H, F, run_order=5)
     fits = identify_series(read_series_sets(paths), check_band=False)
     assert [len(fit.result.modes) for fit in fits] == [1] * 5
-    assert "automatic selection found 2 modes" in fits[0].warnings[0][0]
+    assert "one resonance: identified with 1" in fits[0].warnings[0][0]
     d = series_table(fits)
     assert list(d.modes) == [1] and len(d) == 5
-    assert any("identified with 1, as at 4 of 5 levels" in w for w in d.warnings)
+    assert any("level 1, mode 1: two poles within one half-power width" in w
+               for w in d.warnings)
+
+
+def test_a_level_with_an_extra_mode_is_refitted_with_the_common_count(tmp_path):
+    """One level shows a second, small resonance 0.9 Hz away (a rattle at that level
+    only): the other four levels agree on one mode, so that level is identified again
+    with one and says so; the series is one track with the planted values."""
+    fn, zeta = F0 * (1 - 0.001 * np.arange(5)), 0.006 * 1.2 ** np.arange(5)
+    paths = planted_series(tmp_path, fn, zeta, 2.0 ** np.arange(5), control="force",
+                           noise=0.002)
+    s = read_series_sets([paths[2]])[0]
+    w, wx = 2 * np.pi * s.freq_hz, 2 * np.pi * (fn[2] + 0.9)
+    s.frf[:, 0] += 0.01 / (2.5e5 / wx ** 2 * (wx ** 2 - w ** 2 + 2j * 0.002 * wx * w))
+    from ident.frf_files import write_frf
+    write_frf(paths[2], s)
+    assert len(identify(s.freq_hz, s.frf).modes) == 2           # the precondition
+    fits = identify_series(read_series_sets(paths), check_band=False)
+    note = fits[2].warnings[0][0]
+    assert note.startswith("automatic selection found 2 modes") and "as at 4 of 5" in note
+    d = series_table(fits)
+    assert list(d.modes) == [1] and len(d) == 5
+    # the one-mode fit absorbs part of the rattle, and its uncertainty says so
+    assert abs(d.omega2[2] - (2 * np.pi * fn[2]) ** 2) < 4 * d.omega2_std[2]
 
 
 # ------------------------------------------------------------- files and rules
@@ -258,6 +281,10 @@ def test_series_rules_refuse_with_one_line(tmp_path, capsys):
         load_series([str(table), str(table)])
     with pytest.raises(InputError, match="not an FRF file"):
         load_series([paths[0], str(table)])
+    jump = planted_series(tmp_path / "jump", [F0, F0, 1.1 * F0, 1.1 * F0], [0.01] * 4, held,
+                          control="force")
+    with pytest.raises(InputError, match="no mode could be followed over 4 of the 4 levels"):
+        load_series(jump)
     assert main(["estimate", paths[0], str(table)]) == 2
     assert capsys.readouterr().err.count("\n") == 1
     with pytest.raises(SystemExit) as exc:                  # argparse: choices

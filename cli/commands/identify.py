@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from ident.poles import mac
-from ident.series import identify_series, read_series_sets, series_table
+from ident.series import identify_series, read_series_sets
+from ident.series_table import series_table
 from cli.series_options import add_series_arguments, check_series_args, progress_bar
 from runs.jsonio import print_json
 
