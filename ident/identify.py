@@ -17,8 +17,9 @@ Pipeline of :func:`identify` (single reference, one or more response points):
    and above the band when an F-test says they explain the misfit. Poles that leave
    the band, whose removal
    does not raise the weighted misfit significantly (F-test) or whose fitted peak is
-   below 1 % of the local FRF level are dropped and the rest refitted (a pole may lie
-   outside the band by its half-power half-width, at most a quarter of the band); then the
+   below 1 % of the local FRF level are dropped and the rest refitted (a pole just
+   outside the band is kept when a peak of the mode indicator inside the band lies
+   within its half-power half-width); then the
    weights are replaced by those of a noise model fitted to the residuals
    (:func:`ident.refine.noise_weights`) and the refinement repeated. The returned shape
    is the residue vector ``A_r`` (receptance, complex).
@@ -213,14 +214,17 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
         return refine_selected(f, Hn, p, Wt, band_w)
 
     def physical(p):
-        """Refined poles in the band, or outside it by at most their half-power
-        half-width (a resonance the band cuts, as a force-controlled FRF of a softening
-        joint pulls the fitted pole below the peak), at most a quarter of the band; damping
-        in (1e-7, ZETA_MAX)."""
+        """Refined poles in the band with damping in (1e-7, ZETA_MAX), or just outside it
+        while a peak of the mode indicator inside the band lies within their half-power
+        half-width (a resonance the band cuts: a force-controlled FRF of a softening
+        joint pulls the fitted pole below its peak); not a neighbour's tail."""
         wn_p, z_p = pole_to_modal(p)
-        margin = np.minimum(np.maximum(-p.real, 2 * np.diff(w).max()), 0.25 * (w[-1] - w[0]))
-        return ((p.imag >= w[0] - margin) & (p.imag <= w[-1] + margin) & (z_p > 1e-7)
-                & (z_p < ZETA_MAX))
+        inside = (p.imag >= w[0]) & (p.imag <= w[-1])
+        if peaks.size:
+            reach = -p.real + 2 * np.diff(w).max()
+            inside |= np.any(np.abs(w[peaks][None, :] - p.imag[:, None]) < reach[:, None],
+                             axis=1)
+        return inside & (z_p > 1e-7) & (z_p < ZETA_MAX)
 
     def significant(p, ps):
         """Keep mode r when dropping it (poles fixed, residues refitted) raises the

@@ -4,11 +4,9 @@
 level (:mod:`ident.frf_files`; its header says what the level held, ``control``,
 ``run_order``, the drive point). :func:`identify_series` identifies every level
 (:func:`ident.identify.identify`) and then makes the levels agree on the number of
-modes in the band: a level whose automatic selection put two poles within one
-half-power width (with shapes alike) is identified again with one mode fewer
-(:func:`one_resonance`), and a level that found more modes than most levels (typically
-one with little signal or a force-controlled FRF the joint distorts) again with the
-common number; the level's warnings say so. Each mode gets the warnings of
+modes in the band (:func:`ident.tracking.agree_on_modes`: two poles on one resonance
+become one; a level with more modes than most levels is identified again with the
+common number; the level's warnings say so). Each mode gets the warnings of
 :mod:`ident.fit_quality` (fit error, stability, band sensitivity).
 :func:`ident.series_table.series_table` turns the levels into the measured-data table.
 :func:`load_series` reads either a measured-data table or the FRF files of a series
@@ -28,6 +26,7 @@ from ident.frf_header import with_overrides
 from ident.identify import identify
 from ident.modal_data import MeasuredData
 from ident.series_table import series_table
+from ident.tracking import agree_on_modes
 
 
 @dataclass
@@ -78,25 +77,12 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
                              _identify(s, q, band, n_modes, options)))
     notes = [[] for _ in fits]
     if n_modes is None:
-        for k, f in enumerate(fits):
-            while len(f.result.modes) > 1 and one_resonance(f.result.modes):
-                found = ", ".join(f"{m.frequency_hz:.6g}" for m in f.result.modes)
-                f.result = _identify(f.frfset, f.quantity, band, len(f.result.modes) - 1,
-                                     options)
-                notes[k].append(f"two poles within one half-power width ({found} Hz) are "
-                                f"one resonance: identified with {len(f.result.modes)}")
-    counts = np.array([len(f.result.modes) for f in fits])
-    if n_modes is None and np.any(counts > 0):
-        values, freq = np.unique(counts[counts > 0], return_counts=True)
-        common = int(values[np.argmax(freq)])          # the smaller one on a tie
-        agree = int(np.sum(counts == common))
-        for k, f in enumerate(fits):
-            if counts[k] > common:
-                found = ", ".join(f"{m.frequency_hz:.6g}" for m in f.result.modes)
-                f.result = _identify(f.frfset, f.quantity, band, common, options)
-                notes[k].append(f"automatic selection found {counts[k]} modes ({found} Hz); "
-                                f"identified with {common}, as at {agree} of {len(fits)} "
-                                "levels")
+        def refit(k, n):
+            return _identify(fits[k].frfset, fits[k].quantity, band, n, options)
+
+        results, notes = agree_on_modes([f.result for f in fits], refit)
+        for f, res in zip(fits, results):
+            f.result = res
     for k, f in enumerate(fits):
         def again(b, n, f=f):
             return _identify(f.frfset, f.quantity, b, n, options)
@@ -105,23 +91,6 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
             f.result, i, band_shift(again, f.frfset.freq_hz, f.result, i) if check_band else None)
             for i in range(len(f.result.modes))]
     return fits
-
-
-def one_resonance(modes) -> bool:
-    """True when two modes lie closer than the larger half-power half-width
-    ``zeta omega_n`` and (several points) their shapes agree (MAC >= 0.9): two poles
-    fitted to one resonance, which no level-to-level tracking can separate."""
-    from ident.poles import mac
-
-    for a in range(len(modes)):
-        for b in range(a + 1, len(modes)):
-            ma, mb = modes[a], modes[b]
-            half = max(ma.zeta * ma.frequency_hz, mb.zeta * mb.frequency_hz)
-            if abs(ma.frequency_hz - mb.frequency_hz) >= half:
-                continue
-            if np.size(ma.shape) < 2 or mac(ma.shape, mb.shape)[0, 0] >= 0.9:
-                return True
-    return False
 
 
 def is_frf_file(path) -> bool:

@@ -1,15 +1,76 @@
-"""One mode followed across excitation levels: matching identified modes of successive
-levels (frequency and MAC) and the measured-data table built from them."""
+"""One mode followed across excitation levels: levels agreeing on the number of modes,
+matching identified modes of successive levels (frequency and MAC), and the
+measured-data table built from them."""
 from __future__ import annotations
 
 import numpy as np
 
 from ident.identify import IdentifiedMode
+from ident.lscf import LINK_MAC
 from ident.measured import MeasuredData
 from ident.poles import mac
 
 MATCH_FREQ = 0.05
 MATCH_MAC = 0.8
+
+
+def one_resonance(modes) -> bool:
+    """True when two modes lie closer than the larger half-power half-width
+    ``zeta f_n`` and (several points) their shapes agree (MAC >= 0.9): two poles
+    fitted to one resonance, which no level-to-level tracking can separate."""
+    for a in range(len(modes)):
+        for b in range(a + 1, len(modes)):
+            ma, mb = modes[a], modes[b]
+            half = max(ma.zeta * ma.frequency_hz, mb.zeta * mb.frequency_hz)
+            if abs(ma.frequency_hz - mb.frequency_hz) >= half:
+                continue
+            if np.size(ma.shape) < 2 or mac(ma.shape, mb.shape)[0, 0] >= LINK_MAC:
+                return True
+    return False
+
+
+def agree_on_modes(results, refit):
+    """Make the levels of a series agree on the number of modes in the band.
+
+    A level whose automatic selection put two poles on one resonance
+    (:func:`one_resonance`) is identified again with one mode fewer; then every level
+    with more modes than the most common count (the smaller on a tie; typically a level
+    with little signal, or a force-controlled FRF that a nonlinear joint distorts) is
+    identified again with that count. Levels with fewer modes are kept (a mode may
+    leave the band).
+
+    Parameters
+    ----------
+    results : list of :class:`ident.identify.Identification`, one per level.
+    refit : callable ``(k, n_modes) -> Identification`` identifying level k again.
+
+    Returns
+    -------
+    (results, notes): the new list and, per level, what was done (list of str).
+    """
+    results = list(results)
+    notes = [[] for _ in results]
+
+    def found(res):
+        return ", ".join(f"{m.frequency_hz:.6g}" for m in res.modes)
+
+    for k in range(len(results)):
+        while len(results[k].modes) > 1 and one_resonance(results[k].modes):
+            was = found(results[k])
+            results[k] = refit(k, len(results[k].modes) - 1)
+            notes[k].append(f"two poles within one half-power width ({was} Hz) are one "
+                            f"resonance: identified with {len(results[k].modes)}")
+    counts = np.array([len(r.modes) for r in results])
+    if np.any(counts > 0):
+        values, freq = np.unique(counts[counts > 0], return_counts=True)
+        common = int(values[np.argmax(freq)])
+        agree = int(np.sum(counts == common))
+        for k in np.flatnonzero(counts > common):
+            was = found(results[k])
+            results[k] = refit(int(k), common)
+            notes[k].append(f"automatic selection found {counts[k]} modes ({was} Hz); "
+                            f"identified with {common}, as at {agree} of {len(results)} levels")
+    return results, notes
 
 
 def match_modes(previous: list, current: list) -> list:
