@@ -84,12 +84,10 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
         for f, res in zip(fits, results):
             f.result = res
     for k, f in enumerate(fits):
-        def again(b, n, f=f):
-            return _identify(f.frfset, f.quantity, b, n, options)
-
+        s = f.frfset
         f.warnings = [notes[k] + mode_warnings(
-            f.result, i, band_shift(again, f.frfset.freq_hz, f.result, i) if check_band else None)
-            for i in range(len(f.result.modes))]
+            f.result, i, band_shift(s.freq_hz, s.frf, f.quantity, f.result, i, options)
+            if check_band else None) for i in range(len(f.result.modes))]
     return fits
 
 

@@ -30,6 +30,7 @@ import numpy as np
 from ident.errors import InputError
 from ident.frf_files import FRFSet
 from ident.modal_data import MeasuredData, annotation_warnings
+from ident.poles import modal_receptance
 from ident.tracking import track_modes
 
 MIN_LEVELS = 4
@@ -47,13 +48,13 @@ def drive_point(s: FRFSet) -> tuple[int, str | None]:
 
 def mode_frf_at_resonance(mode, point: int, quantity: str) -> float:
     """``|H_r(omega_d)|`` of one identified mode at a point, in the FRF's quantity per N:
-    ``A/(i w - lambda) + conj(A)/(i w - conj(lambda))`` at ``w = Im(lambda)``, times
-    ``w`` (mobility) or ``w^2`` (accelerance)."""
-    lam, a = complex(mode.pole), complex(np.atleast_1d(mode.shape)[point])
-    w = lam.imag
-    h = a / (1j * w - lam) + np.conj(a) / (1j * w - np.conj(lam))
+    its modal receptance (:func:`ident.poles.modal_receptance`) at
+    ``omega_d = Im(lambda)``, times ``omega_d`` (mobility) or ``omega_d^2``
+    (accelerance)."""
+    w = mode.pole.imag
+    h = modal_receptance(mode.pole, np.atleast_1d(mode.shape)[point], w / (2 * np.pi))
     power = {"receptance": 0, "mobility": 1, "accelerance": 2}[quantity]
-    return float(abs(h) * w ** power)
+    return float(abs(h[0, 0]) * w ** power)
 
 
 def _amplitudes(f, mode):

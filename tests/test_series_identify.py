@@ -290,3 +290,21 @@ def test_series_rules_refuse_with_one_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:                  # argparse: choices
         main(["identify", *paths, "--control", "amplitude"])
     assert exc.value.code == 2 and capsys.readouterr().err.count("\n") == 1
+
+
+@pytest.mark.parametrize("seed", [11, 14, 25])
+def test_linear_modes_raise_no_fit_warning(seed):
+    """Linear 3-mode FRFs (1 % noise; neighbours with 3-5 % damping 50 Hz apart at
+    seed 14, a neighbour at the narrowed band's edge at seed 11): no band-sensitivity,
+    stability or fit-error warning on any mode, one or four points."""
+    from test_identify import FREQ, add_noise, draw_system, receptance
+
+    from ident.frf_files import FRFSet
+
+    for n_points in (1, 4):
+        fn, zeta, phi = draw_system(seed, n_points)
+        H = add_noise(receptance(fn, zeta, phi, FREQ), 0.01, seed)
+        s = FRFSet(FREQ, H, [str(p) for p in range(n_points)], "receptance", 1.0, "0")
+        (fit,) = identify_series([s])
+        assert len(fit.result.modes) == 3
+        assert fit.warnings == [[], [], []], fit.warnings
