@@ -47,8 +47,8 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError
-from ident.frf_header import (CONTROLS, HEADER_KEYS, parse_control, parse_excitation,
-                              parse_run_order)
+from ident.frf_header import (CONTROLS, HEADER_KEYS, header_values, id_line_values,
+                              parse_control, parse_excitation, parse_run_order)
 from ident.poles import QUANTITIES
 
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
@@ -57,7 +57,6 @@ _DIRS = {1: "+X", 2: "+Y", 3: "+Z", 4: "+RX", 5: "+RY", 6: "+RZ",
          -1: "-X", -2: "-Y", -3: "-Z", -4: "-RX", -5: "-RY", -6: "-RZ"}
 _DIR_CODE = {v: k for k, v in _DIRS.items()}
 _LABEL = re.compile(r"^(\d+)([+-]R?[XYZ])?$")
-_ID_KEY = re.compile(r"\b(excitation|control|run_order|reference)\s*=\s*([^\s,;]+)")
 
 
 @dataclass
@@ -229,17 +228,7 @@ def write_frf_csv(path, frfset: FRFSet) -> None:
     for p in frfset.points:
         if "," in p or not p:
             raise ValueError(f"point label {p!r} cannot be used as a CSV column name")
-    lines = []
-    if frfset.quantity:
-        lines.append(f"# quantity = {frfset.quantity}")
-    if frfset.control:
-        lines.append(f"# control = {frfset.control}")
-    if frfset.run_order is not None:
-        lines.append(f"# run_order = {int(frfset.run_order)}")
-    if frfset.excitation is not None:
-        lines.append(f"# excitation = {float(frfset.excitation)!r}")
-    if frfset.reference:
-        lines.append(f"# reference = {frfset.reference}")
+    lines = [f"# {key} = {text}" for key, text in header_values(frfset)]
     names = ["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]
     n_pts = len(frfset.points)
     table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + (frfset.force is not None)))
@@ -301,23 +290,14 @@ def read_frf_uff(path) -> FRFSet:
         raise InputError(f"{src}: duplicate response point in FRFs ({', '.join(points)})")
     codes = {int(s.get("ordinate_spec_data_type", 0)) for s in sets}
     quantity = _UFF_ORDINATE.get(codes.pop()) if len(codes) == 1 else None
-    found: dict[str, tuple[str, str]] = {}
-    for key in ("id1", "id2", "id3", "id4", "id5"):
-        for m in _ID_KEY.finditer(str(sets[0].get(key, ""))):
-            found.setdefault(m.group(1), (key, m.group(2)))
-    excitation = control = run_order = None
-    if "excitation" in found:
-        excitation = parse_excitation(found["excitation"][1], f"{src}: {found['excitation'][0]}")
-    if "control" in found:
-        control = parse_control(found["control"][1], f"{src}: {found['control'][0]}")
-    if "run_order" in found:
-        run_order = parse_run_order(found["run_order"][1], f"{src}: {found['run_order'][0]}")
+    keys = id_line_values(sets[0], src)
     if np.any(np.diff(x) <= 0):
         raise InputError(f"{src}: frequencies must be strictly increasing")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(frf))):
         raise InputError(f"{src}: non-finite frequency or FRF value")
-    reference = found["reference"][1] if "reference" in found else _label(*refs.pop())
-    return FRFSet(x, frf, points, quantity, excitation, reference, src, control, run_order)
+    reference = keys.get("reference") or _label(*refs.pop())
+    return FRFSet(x, frf, points, quantity, keys.get("excitation"), reference, src,
+                  keys.get("control"), keys.get("run_order"))
 
 
 def write_frf_uff(path, frfset: FRFSet) -> None:
@@ -335,16 +315,10 @@ def write_frf_uff(path, frfset: FRFSet) -> None:
     even = bool(np.allclose(df, df[0], rtol=1e-9, atol=0)) if f.size > 1 else True
     ref_node, ref_dir = _node_dir(frfset.reference or "1", 1)
     code = _UFF_ORDINATE_CODE.get(frfset.quantity, 0)
-    keys = []
-    if frfset.excitation is not None:
-        keys.append(f"excitation={float(frfset.excitation)!r}")
-    if frfset.control:
-        keys.append(f"control={frfset.control}")
-    if frfset.run_order is not None:
-        keys.append(f"run_order={int(frfset.run_order)}")
-    if frfset.reference and _LABEL.match(frfset.reference) is None:
-        keys.append(f"reference={frfset.reference}")
-    id4 = " ".join(keys) or "NONE"
+    id4 = " ".join(f"{key}={text}" for key, text in header_values(frfset)
+                   if key != "quantity" and (key != "reference"
+                                             or _LABEL.match(frfset.reference) is None))
+    id4 = id4 or "NONE"
     if len(id4) > 80:
         raise ValueError(f"UFF ID line too long for the keys ({id4!r}); use CSV")
     if frfset.force is not None:

@@ -9,12 +9,14 @@ line override the file's (:func:`with_overrides`).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 
 from ident.errors import InputError
 
 CONTROLS = ("force", "response")
 HEADER_KEYS = ("quantity", "control", "run_order", "excitation", "reference")
+_ID_KEY = re.compile(r"\b(excitation|control|run_order|reference)\s*=\s*([^\s,;]+)")
 
 
 def parse_excitation(text, where: str) -> float:
@@ -45,6 +47,28 @@ def parse_run_order(text, where: str) -> int:
     if not (math.isfinite(value) and value == round(value) and value >= 1):
         raise InputError(f"{where}: run_order must be an integer >= 1, got {text!r}")
     return int(round(value))
+
+
+def header_values(frfset) -> list[tuple[str, str]]:
+    """The set's header keys that have a value, as (key, text), in ``HEADER_KEYS``
+    order (floats with 17 significant digits: exact round trip)."""
+    values = {"quantity": frfset.quantity, "control": frfset.control,
+              "run_order": None if frfset.run_order is None else str(int(frfset.run_order)),
+              "excitation": None if frfset.excitation is None else repr(float(frfset.excitation)),
+              "reference": frfset.reference or None}
+    return [(k, values[k]) for k in HEADER_KEYS if values[k] is not None]
+
+
+def id_line_values(dataset: dict, source: str) -> dict:
+    """``key=value`` header keys in the ID lines (``id1`` .. ``id5``) of a UFF data set 58,
+    checked by the rules above (the first occurrence of a key counts)."""
+    found: dict[str, tuple[str, str]] = {}
+    for line in ("id1", "id2", "id3", "id4", "id5"):
+        for m in _ID_KEY.finditer(str(dataset.get(line, ""))):
+            found.setdefault(m.group(1), (line, m.group(2)))
+    parse = {"excitation": parse_excitation, "control": parse_control,
+             "run_order": parse_run_order, "reference": lambda text, where: text}
+    return {k: parse[k](text, f"{source}: {line}") for k, (line, text) in found.items()}
 
 
 def with_overrides(frfset, excitation=None, control=None, run_order=None, reference=None):
