@@ -197,3 +197,24 @@ def run_response_control(args) -> int:
     print("files: " + ", ".join(rep["files"]) + f"; {rep['timings']['total_s']:.1f} s",
           file=sys.stdout)
     return 0
+
+
+def format_prediction(pred: dict) -> str:
+    """Table of :func:`cases.backbone_prediction.predict_from_backbone` (``estimate
+    --backbone``)."""
+    def f(x, spec):
+        return "n/a" if x is None else format(x, spec)
+
+    lines = ["", f"FE backbone prediction ({pred['case']}, FE mode {pred['fe_mode']}, EPMC "
+             f"{pred['path']} path, {pred['points']} points): the estimated joint chi = "
+             f"{pred['chi']:.5f}, R~ = {pred['R']:.4g} in every glue element, read at the "
+             f"resonance of each level's force",
+             " level  held  force_N   omega^2 pred    omega^2 meas    zeta pred %  "
+             "zeta meas %  slip/phi_max"]
+    for r in pred["levels"]:
+        lines.append(f" {r['level']:5d}  {'*' if r['held_out'] else ' ':>4}  {r['force_N']:7.4g} "
+                     f"{f(r['omega2'], '14.1f'):>14s}  {r['measured_omega2']:14.1f}  "
+                     f"{f(r['zeta'] and 100 * r['zeta'], '11.5f'):>11s}  "
+                     f"{100 * r['measured_zeta']:11.5f}  {f(r['slip_over_phi_max'], '12.4g'):>12s}")
+    lines.append("  (* = held out of the fit; n/a = force beyond the computed backbone)")
+    return "\n".join(lines)
