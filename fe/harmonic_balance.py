@@ -29,7 +29,7 @@ from functools import lru_cache
 import numpy as np
 
 from fe.aft import aft_joint_force
-from fe.newton_path import SteadyStateError, damped_newton, follow
+from fe.newton_path import SteadyStateError, damped_newton, follow, natural_continuation
 from fe.reduction import JointBank, ReducedModel
 
 __all__ = ["HBSettings", "HBSolution", "HBOperator", "check_joint_stiffness", "solve_hb",
@@ -249,10 +249,9 @@ def _load_continuation(balance: _Balance, settings: HBSettings, scale: float):
     return z, iters[0]
 
 
-#: Halvings of the step of the load continuation (in ln of the load factor) and of the
-#: frequency step between two lines before a line is given up.
+#: Halvings of the step of the load continuation (in ln of the load factor) before a
+#: fresh start is given up.
 LOAD_HALVINGS = 10
-FREQUENCY_HALVINGS = 8
 
 
 def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
@@ -315,62 +314,6 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     amp = 0.5 * (s_t.max(axis=1) - s_t.min(axis=1))
     return HBSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Gh, q=q,
                       slip_amplitude=amp, iterations=it, residual=float(upd))
-
-
-def _secant(w, history):
-    """Secant predictor of the slip harmonics at ``w`` from converged ``(omega,
-    HBSolution)`` pairs (the last one alone: its slips)."""
-    (w2, s2) = history[-1]
-    if len(history) < 2:
-        return s2.slip
-    w1, s1 = history[-2]
-    t = (w - w2) / (w2 - w1) if w2 != w1 else 0.0
-    return s2.slip + t * (s2.slip - s1.slip)
-
-
-def natural_continuation(solve, omegas, progress) -> list[HBSolution]:
-    """Natural-parameter continuation with a secant predictor and step-size control
-    (see :func:`continuation`); ``solve(omega, guess)`` returns an :class:`HBSolution`
-    or raises ``RuntimeError``."""
-    sols: list[HBSolution] = []
-    for i, w in enumerate(np.asarray(omegas, dtype=float)):
-        hist = [(s.omega, s) for s in sols[-2:]]
-        guess = _secant(w, hist) if hist else None
-        try:
-            sol = solve(w, guess)
-        except RuntimeError as exc:
-            if guess is None:
-                raise
-            sol = _recover(solve, w, hist, exc)
-        sols.append(sol)
-        if progress is not None:
-            progress.update(1)
-    return sols
-
-
-def _recover(solve, w, hist, exc):
-    """A line whose secant prediction failed: the previous solution as the guess, then
-    the frequency step from the previous line halved until the corrector converges
-    (:func:`fe.newton_path.follow`), then a fresh start from the stuck-joint solution
-    (``solve(w, None)``: the jump of a stepped-sine test when the branch ends)."""
-    try:
-        return solve(w, hist[-1][1].slip)
-    except RuntimeError:
-        pass
-    try:
-        return follow(solve, hist, w, _secant, max_halvings=FREQUENCY_HALVINGS)[0]
-    except RuntimeError:
-        pass
-    try:
-        return solve(w, None)
-    except RuntimeError as fresh:
-        reason = getattr(exc, "reason", str(exc))
-        df = abs(w - hist[-1][0]) / (2 * np.pi) * 2.0 ** -FREQUENCY_HALVINGS
-        raise SteadyStateError(
-            f"{w / (2 * np.pi):.6g} Hz",
-            f"{reason} (from the previous line; also with the frequency step halved to "
-            f"{df:.2g} Hz, and from the stuck-joint solution: "
-            f"{getattr(fresh, 'reason', str(fresh))})") from None
 
 
 def continuation(model: ReducedModel, bank: JointBank, load, omegas,

@@ -25,25 +25,33 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["SteadyStateError", "damped_newton", "follow"]
+__all__ = ["SteadyStateError", "damped_newton", "follow", "natural_continuation"]
 
 #: Armijo constant ``c`` of the sufficient-decrease rule.
 ARMIJO = 1e-4
 #: Smallest line-search factor tried before the step is declared stalled.
 MIN_DAMPING = 2.0 ** -12
+#: Halvings of the frequency step between two lines before a line is given up.
+FREQUENCY_HALVINGS = 8
 
 
 class SteadyStateError(RuntimeError):
     """No steady state: ``where`` (e.g. ``"236 Hz"``) and ``reason``, both one line;
-    ``context`` is filled in by callers (e.g. ``"level 8 (F = 0.64 N)"``)."""
+    ``context`` is filled in by callers (e.g. ``"level 8 (F = 0.64 N)"``, see
+    :meth:`within`); ``solver`` names the method."""
 
-    def __init__(self, where: str, reason: str, context: str = ""):
-        self.where, self.reason, self.context = where, reason, context
-        super().__init__(where, reason, context)
+    def __init__(self, where: str, reason: str, context: str = "",
+                 solver: str = "harmonic balance"):
+        self.where, self.reason, self.context, self.solver = where, reason, context, solver
+        super().__init__(where, reason, context, solver)
+
+    def within(self, context: str) -> "SteadyStateError":
+        """The same failure located in ``context``."""
+        return SteadyStateError(self.where, self.reason, context, self.solver)
 
     def __str__(self) -> str:
         head = f"{self.context}, line {self.where}" if self.context else self.where
-        return f"harmonic balance did not converge at {head}: {self.reason}"
+        return f"{self.solver} did not converge at {head}: {self.reason}"
 
 
 def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
@@ -151,3 +159,65 @@ def follow(solve: Callable, history: list, p1: float, predictor: Callable,
         if p == p1:
             return x, n_solves
         step = np.sign(span) * min(abs(2.0 * step), abs(p1 - p))
+
+
+def _secant(w, history):
+    """Secant predictor of the slip harmonics at ``w`` from converged ``(omega,
+    solution)`` pairs (the last one alone: its slips)."""
+    (w2, s2) = history[-1]
+    if len(history) < 2:
+        return s2.slip
+    w1, s1 = history[-2]
+    t = (w - w2) / (w2 - w1) if w2 != w1 else 0.0
+    return s2.slip + t * (s2.slip - s1.slip)
+
+
+def natural_continuation(solve, omegas, progress) -> list:
+    """Natural-parameter continuation over the lines ``omegas`` (rad/s), in their order.
+
+    Each line starts from a secant extrapolation of the two previous solutions (the
+    previous one at the second line; ``guess=None`` at the first, the solver's own
+    start), which follows the branch the way a stepped-sine sweep does. A line whose
+    corrector fails is recovered by :func:`_recover`. ``solve(omega, guess)`` returns a
+    solution with ``omega`` and ``slip`` (complex slip harmonics, the guess's form) or
+    raises ``RuntimeError``; ``progress``: a tqdm bar or None (one tick per line).
+    """
+    sols = []
+    for i, w in enumerate(np.asarray(omegas, dtype=float)):
+        hist = [(s.omega, s) for s in sols[-2:]]
+        guess = _secant(w, hist) if hist else None
+        try:
+            sol = solve(w, guess)
+        except RuntimeError as exc:
+            if guess is None:
+                raise
+            sol = _recover(solve, w, hist, exc)
+        sols.append(sol)
+        if progress is not None:
+            progress.update(1)
+    return sols
+
+
+def _recover(solve, w, hist, exc):
+    """A line whose secant prediction failed: the previous solution as the guess, then
+    the frequency step from the previous line halved until the corrector converges
+    (:func:`fe.newton_path.follow`), then a fresh start from the stuck-joint solution
+    (``solve(w, None)``: the jump of a stepped-sine test when the branch ends)."""
+    try:
+        return solve(w, hist[-1][1].slip)
+    except RuntimeError:
+        pass
+    try:
+        return follow(solve, hist, w, _secant, max_halvings=FREQUENCY_HALVINGS)[0]
+    except RuntimeError:
+        pass
+    try:
+        return solve(w, None)
+    except RuntimeError as fresh:
+        reason = getattr(exc, "reason", str(exc))
+        df = abs(w - hist[-1][0]) / (2 * np.pi) * 2.0 ** -FREQUENCY_HALVINGS
+        raise SteadyStateError(
+            f"{w / (2 * np.pi):.6g} Hz",
+            f"{reason} (from the previous line; also with the frequency step halved to "
+            f"{df:.2g} Hz, and from the stuck-joint solution: "
+            f"{getattr(fresh, 'reason', str(fresh))})") from None

@@ -62,7 +62,12 @@ class NewmarkProtocol:
     ``steps_per_period`` time steps per excitation period; ``tol`` relative bound on
     the remaining drift of the first harmonic; ``min_periods``/``max_periods`` per line
     (``max_periods`` reached raises); HHT ``alpha``; ``prewarp`` the frequency
-    correction of the trapezoidal rule.
+    correction of the trapezoidal rule. ``hb_start``: None carries the state from line
+    to line (from rest at the first line), like a test; harmonic-balance settings start
+    every line on the harmonic-balance orbit of that line instead
+    (:meth:`fe.newmark.NewmarkState.periodic`, phase 0), so that only the difference
+    between the two steady states has to decay (not the transients of the slow low
+    modes a line change excites), then integrate until periodic as above.
     """
 
     steps_per_period: int = 256
@@ -71,6 +76,7 @@ class NewmarkProtocol:
     max_periods: int = 5000
     alpha: float = 0.0
     prewarp: bool = True
+    hb_start: HBSettings | None = None
     name: str = "newmark"
 
 

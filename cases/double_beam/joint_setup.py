@@ -201,21 +201,24 @@ def nonlinear_model(model, setup: JointSetup, study: DoubleBeamStudy):
     return red, bank
 
 
-def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy):
+def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy, protocol: str = "hb"):
     """The stepped-sine campaign of the study: ``study.lines`` (Hz, upward) at the
     forces ``setup.force`` (N) on the drive DOF, every DOF recorded, harmonic balance
-    with ``study.hb`` (:class:`runs.stepped_sine.HBProtocol`).
+    with ``study.hb`` (``protocol="hb"``) or time integration (``"newmark"``;
+    :func:`cases.double_beam.protocols.campaign_protocol`).
 
     Returns
     -------
     runs.stepped_sine.Campaign
     """
-    from runs.campaign import Campaign, HBProtocol
+    from cases.double_beam.protocols import campaign_protocol
+    from runs.campaign import Campaign
 
     n = model.M.shape[0]
     load = np.zeros(n)
     load[int(model.drive_dof)] = 1.0
-    return Campaign(study.lines, setup.force, load, np.arange(n), HBProtocol(study.hb))
+    return Campaign(study.lines, setup.force, load, np.arange(n),
+                    campaign_protocol(protocol, study.hb))
 
 
 def mode_weights(model, setup: JointSetup):

@@ -63,6 +63,11 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
           _f(r["phi_max"], ".4e"), _f(r["F_S"], ".4g"), _f(r["top_linear_slip_over_phi_max"], ".4f"),
           _f(r.get("top_simulated_slip_over_phi_max"), ".4f")] for r in rep.force_scale_rows])
 
+    if rep.protocol_comparison is not None:
+        from cases.double_beam.protocols import comparison_lines
+
+        out += ["## Newmark against harmonic balance", "", "```"]
+        out += comparison_lines(rep.protocol_comparison) + ["```", ""]
     out.append("## Measured vs simulated, per level")
     out.append("")
     out.append("Differences are simulated - measured. Loss = omega^2(level 1) - omega^2(level); "

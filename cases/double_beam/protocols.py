@@ -1,0 +1,130 @@
+"""Which solver drives the double-beam campaign, and Newmark checked against harmonic balance.
+
+``iwanfe reproduce double-beam`` runs the stepped sine by harmonic balance (``"hb"``,
+:class:`runs.campaign.HBProtocol`); ``--protocol newmark`` runs the same lines, levels,
+reduced model and Jenkins banks by time integration (:class:`runs.campaign.NewmarkProtocol`,
+HHT alpha = 0: the average-acceleration rule, frequency pre-warped) and identifies each
+level as the harmonic-balance run does; :func:`protocol_comparison` then puts both
+side by side.
+
+Both solve the same discrete model (same basis, same banks), so what can separate them:
+
+* the steady state. Each line is integrated until periodic: the change of the
+  first harmonic between periods, extrapolated geometrically over the remaining
+  transient, below :data:`NEWMARK_TOL` relative. A line change excites every mode, and
+  the lowest (10 Hz, 1.28 % damping) decays over ~300 periods of the drive, so the
+  state is not carried from the previous line: every line starts on the harmonic-balance
+  orbit of that line (:meth:`fe.newmark.NewmarkState.periodic`), and only the small
+  difference between the two steady states has to decay (measured: 5-35 periods per
+  line at level 7 against 350-575 with the state carried; receptances equal to 1e-7);
+* the time step: :data:`NEWMARK_STEPS` steps per period, the trapezoidal rule's
+  frequency error removed by pre-warping (exact for the linear part), the joints'
+  force integrated to O(dt^2);
+* harmonic truncation: harmonic balance keeps the odd harmonics to 7 (the study's
+  ``hb``), the integration all of them (to the Nyquist limit).
+
+Measured on the default study (``benchmarks/bench_newmark_campaign.py``): receptances
+within 2e-6 relative at resonance, identified frequencies within 1e-8 and damping
+ratios within 1e-5 relative at every level.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from fe.harmonic_balance import HBSettings
+from runs.campaign import HBProtocol, NewmarkProtocol
+
+__all__ = ["PROTOCOLS", "NEWMARK_STEPS", "NEWMARK_TOL", "FREQUENCY_TARGET", "ZETA_TARGET",
+           "campaign_protocol", "protocol_comparison"]
+
+#: Solvers of the campaign (``--protocol``).
+PROTOCOLS = ("hb", "newmark")
+#: Time steps per drive period and the periodicity tolerance of the Newmark protocol.
+NEWMARK_STEPS = 256
+NEWMARK_TOL = 1e-6
+#: Acceptance of the comparison (issue 13): relative differences of the identified
+#: natural frequency and damping ratio, Newmark against harmonic balance.
+FREQUENCY_TARGET = 1e-5
+ZETA_TARGET = 5e-3
+
+
+def campaign_protocol(name: str, hb: HBSettings):
+    """The campaign protocol of ``name`` (:data:`PROTOCOLS`); ``hb`` the study's
+    harmonic-balance settings (also the orbit every Newmark line starts on)."""
+    if name == "hb":
+        return HBProtocol(hb)
+    if name == "newmark":
+        return NewmarkProtocol(steps_per_period=NEWMARK_STEPS, tol=NEWMARK_TOL, hb_start=hb)
+    raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {name!r}")
+
+
+def _relative(a, b):
+    return np.asarray(a, dtype=float) / np.asarray(b, dtype=float) - 1.0
+
+
+def protocol_comparison(levels, newmark: tuple, hb: tuple, newmark_result,
+                        hb_result) -> dict:
+    """Per-level identified frequency and damping of the Newmark run beside the
+    harmonic-balance run's (``newmark``, ``hb``: ``(LevelIdentification,
+    ModalFilterLevels)`` each), relative differences (Newmark / HB - 1), the largest of
+    them against :data:`FREQUENCY_TARGET` and :data:`ZETA_TARGET`, and both campaigns'
+    cost (``*_result``: :class:`runs.campaign.CampaignResult`).
+    """
+    (nl, nf), (hl, hf) = newmark, hb
+    rows = []
+    for i, lv in enumerate(levels):
+        rows.append({
+            "level": int(lv),
+            "frequency_hz": {"hb": float(hl.frequency_hz[i]), "newmark": float(nl.frequency_hz[i]),
+                             "relative_difference": float(_relative(nl.frequency_hz[i],
+                                                                    hl.frequency_hz[i]))},
+            "zeta": {"hb": float(hl.zeta[i]), "newmark": float(nl.zeta[i]),
+                     "relative_difference": float(_relative(nl.zeta[i], hl.zeta[i]))},
+            "modal_filter": {
+                "frequency_relative_difference": float(_relative(nf.frequency_hz[i],
+                                                                 hf.frequency_hz[i])),
+                "zeta_relative_difference": float(_relative(nf.zeta[i], hf.zeta[i]))},
+            "periods_per_line_mean": float(np.mean(newmark_result.work[i])),
+        })
+    df = max(abs(r["frequency_hz"]["relative_difference"]) for r in rows)
+    dz = max(abs(r["zeta"]["relative_difference"]) for r in rows)
+    return {
+        "levels": rows,
+        "max_frequency_relative_difference": df,
+        "max_zeta_relative_difference": dz,
+        "frequency_target": FREQUENCY_TARGET, "zeta_target": ZETA_TARGET,
+        "met": bool(df <= FREQUENCY_TARGET and dz <= ZETA_TARGET),
+        "newmark": {"steps_per_period": NEWMARK_STEPS, "tol": NEWMARK_TOL,
+                    "start": "harmonic-balance orbit of each line",
+                    "campaign_s": float(np.sum(newmark_result.elapsed)),
+                    "levels_computed": int(np.sum(newmark_result.computed)),
+                    "periods_total": float(np.sum(newmark_result.work))},
+        "hb": {"campaign_s": float(np.sum(hb_result.elapsed)),
+               "levels_computed": int(np.sum(hb_result.computed)),
+               "newton_iterations_total": float(np.sum(hb_result.work))},
+    }
+
+
+def comparison_lines(comp: dict) -> list[str]:
+    """:func:`protocol_comparison` as a plain-text table (the command's output and
+    ``report.md``)."""
+    nm, hb = comp["newmark"], comp["hb"]
+    out = ["Newmark vs harmonic balance (same reduced model, banks, lines and identification; "
+           "rel. diff = Newmark/HB - 1):",
+           " level   f HB (Hz)     f Newmark (Hz)   rel. diff   zeta HB %   zeta Newmark %  "
+           "rel. diff   periods/line"]
+    for r in comp["levels"]:
+        f, z = r["frequency_hz"], r["zeta"]
+        out.append(f" {r['level']:>5}  {f['hb']:12.7f}  {f['newmark']:12.7f}  "
+                   f"{f['relative_difference']:+10.2e}  {100 * z['hb']:9.6f}  "
+                   f"{100 * z['newmark']:11.6f}     {z['relative_difference']:+10.2e}  "
+                   f"{r['periods_per_line_mean']:8.1f}")
+    out.append(f" largest |rel. diff|: frequency {comp['max_frequency_relative_difference']:.2e} "
+               f"(target {comp['frequency_target']:g}), damping "
+               f"{comp['max_zeta_relative_difference']:.2e} (target {comp['zeta_target']:g}): "
+               + ("met" if comp["met"] else "NOT met"))
+    out.append(f" cost (CPU seconds summed over levels): Newmark {nm['campaign_s']:.1f} s "
+               f"({nm['levels_computed']} levels computed, {nm['periods_total']:.0f} periods of "
+               f"{nm['steps_per_period']} steps, including the orbits it starts from), "
+               f"harmonic balance {hb['campaign_s']:.1f} s ({hb['levels_computed']} computed)")
+    return out
