@@ -67,7 +67,11 @@ class NewmarkProtocol:
     every line on the harmonic-balance orbit of that line instead
     (:meth:`fe.newmark.NewmarkState.periodic`, phase 0), so that only the difference
     between the two steady states has to decay (not the transients of the slow low
-    modes a line change excites), then integrate until periodic as above.
+    modes a line change excites), then integrate until periodic as above;
+    ``macro_steps_per_period`` (with ``hb_start``) is used instead of
+    ``steps_per_period`` on a level whose harmonic-balance orbits leave micro-slip (a
+    slip amplitude at or above the bank's largest slip limit at some line), where the
+    joint force is far from smooth (:meth:`steps_for`).
     """
 
     steps_per_period: int = 256
@@ -77,7 +81,15 @@ class NewmarkProtocol:
     alpha: float = 0.0
     prewarp: bool = True
     hb_start: HBSettings | None = None
+    macro_steps_per_period: int | None = None
     name: str = "newmark"
+
+    def steps_for(self, slip_amplitude_max: float, slip_limit_max: float) -> int:
+        """Steps per period of a level whose largest slip amplitude (m) is
+        ``slip_amplitude_max``, for a bank whose largest slip limit is ``slip_limit_max``."""
+        if self.macro_steps_per_period and slip_amplitude_max >= slip_limit_max:
+            return int(self.macro_steps_per_period)
+        return int(self.steps_per_period)
 
 
 @dataclass(frozen=True)

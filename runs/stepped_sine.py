@@ -94,11 +94,13 @@ def _newmark_level(model, bank, campaign, F, tick):
     slip = np.empty((n_lines, model.n_joints), dtype=complex)
     amp = np.empty((n_lines, model.n_joints))
     work = np.empty(n_lines)
-    k = np.arange(N + 1)
     orbits = None
     if pr.hb_start is not None:
         orbits = continuation(model, bank, load, 2 * np.pi * campaign.frequency_hz,
                               pr.hb_start)
+        N = pr.steps_for(max(o.slip_amplitude.max() for o in orbits),
+                         float(bank.slip_limit.max()))
+    k = np.arange(N + 1)
     for li, f_hz in enumerate(campaign.frequency_hz):
         w = 2 * np.pi * f_hz
         if pr.prewarp:

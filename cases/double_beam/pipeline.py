@@ -155,7 +155,10 @@ def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
         hb_res, _ = _campaign(red, bank, level_campaign(model, setup, study, "hb"), store,
                               progress, workers, executor)
         hb_ids = identify_campaign(model, setup, study, hb_res, phi, weights)
-        comparison = protocol_comparison(data.level, (ident, mf), hb_ids, res, hb_res)
+        proto = level_campaign(model, setup, study, protocol).protocol
+        steps = [proto.steps_for(float(a.max()), float(bank.slip_limit.max()))
+                 for a in hb_res.slip_amplitude]
+        comparison = protocol_comparison(data.level, (ident, mf), hb_ids, res, hb_res, steps)
         timings["campaign_hb_check"] = time.perf_counter() - t1
     if not np.all(np.isfinite(ident.omega2)):
         bad = data.level[~np.isfinite(ident.omega2)]
