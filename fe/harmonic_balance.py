@@ -17,7 +17,11 @@ Newton's method uses). Physical response harmonics follow as
 ``Q_h = D_h^{-1} (p delta_{h1} - G^T N_h)``. This module holds the settings, the
 solution type, the condensed operator (:class:`HBOperator`, shared with the
 first-harmonic balance on exact Iwan joints of :mod:`fe.hb_exact`), :func:`solve_hb`
-and the continuation over frequency lines.
+and the continuation over frequency lines. The Newton iteration is globalized
+(:mod:`fe.newton_path`): a line search on the residual norm, a fresh start by
+continuation in the load from the all-stuck solution, and the frequency step between
+lines halved when a line's corrector fails; a line that still fails raises
+:class:`fe.newton_path.SteadyStateError` (one line: where and why).
 
 SI units: rad/s, m, N.
 """

@@ -5,7 +5,8 @@ what the solver runs; the other choices of the study are in
 :mod:`cases.double_beam.settings`.
 
 Joints. The FE model carries one tangential joint per glue node with a share ``w_m =
-k_m / K_T`` of the stuck glue stiffness ``K_T = 1e8 N/m``. Each becomes a
+k_m / K_T`` of the stuck glue stiffness ``K_T`` (1e8 N/m assumed, or ``--glue-kt`` with
+the grip re-calibrated: :func:`cases.double_beam.calibration.calibrated_model`). Each becomes a
 four-parameter Iwan element with the same ``chi`` and the same share of ``R`` and ``S``
 (``R_m = w_m R``), hence the same ``phi_max``: this is exactly the model
 :func:`inverse.estimate.b_tilde` assumes (eq. 1 of :mod:`inverse.estimate`), so the

@@ -301,8 +301,6 @@ def _run_double_beam(args) -> int:
     from cases.double_beam.study import run_study
 
     from cases.double_beam.calibration import calibrated_model
-    from fe.newton_path import SteadyStateError
-
     t0 = time.perf_counter()
     study = _double_beam_study(args)
     glue_kt = getattr(args, "glue_kt", None)
@@ -318,8 +316,8 @@ def _run_double_beam(args) -> int:
     try:
         rep = run_study(study, store=out, progress=progress, executor=executor, model=model,
                         protocol=protocol, calibration=calibration)
-    except SteadyStateError as exc:
-        print(f"iwanfe: {exc}", file=sys.stderr)
+    except RuntimeError as exc:     # no steady state (SteadyStateError), no mode identified
+        print(f"iwanfe: {exc}".splitlines()[0], file=sys.stderr)
         return 1
     files = write_report(rep, out, t0)
     wall = time.perf_counter() - t0
