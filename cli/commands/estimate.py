@@ -56,6 +56,9 @@ def register(subparsers) -> None:
                              "voltage; an assumption, R~ scales as its -(chi+1) power)")
     parser.add_argument("--confidence", type=float, default=DEFAULT_CONFIDENCE,
                         help="level of the t-intervals")
+    parser.add_argument("--backbone", action="store_true",
+                        help="with --case: predict every level from the FE model's EPMC "
+                             "backbone with the estimated joint (iwanfe backbone)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--plot", metavar="FILE.png", default=None,
                         help="write the log-slope plot (paper Fig. 8)")
@@ -70,6 +73,7 @@ def run(args) -> int:
     est = estimate(data, fit_levels=args.fit_levels, method=args.method, mode=args.mode,
                    model=model, case_name=args.case or "model", force_scale=args.force_scale,
                    fe_mode=args.fe_mode, confidence=args.confidence)
+    backbone = _backbone(args, data, est)
     if args.plot:
         from viz.logslope import plot_estimate
 
@@ -77,12 +81,28 @@ def run(args) -> int:
     if args.json:
         out = est.to_dict()
         out["file"] = args.file
+        if backbone is not None:
+            out["backbone"] = backbone
         print_json(out)
     else:
         print(format_table(est, args.file))
+        if backbone is not None:
+            from cli.commands.backbone import format_prediction
+            print(format_prediction(backbone))
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0
+
+
+def _backbone(args, data, est):
+    """The backbone predictions of ``--backbone`` (cases.backbone_prediction), or None."""
+    if not args.backbone:
+        return None
+    if args.case is None:
+        raise ValueError("--backbone needs --case (the FE model the joint is put into)")
+    from cases.backbone_prediction import predict_from_backbone
+
+    return predict_from_backbone(data, est, args.case, args.force_scale)
 
 
 def format_table(est, source: str = "") -> str:
