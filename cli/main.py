@@ -29,6 +29,7 @@ COMMANDS = [
     "reproduce",
     "uncertainty",
     "diagnose",
+    "update",
 ]
 
 
