@@ -10,7 +10,7 @@ least squares with the noise model of :func:`inverse.update.noise_model`
 is the extension with the largest AICc drop, if the drop exceeds 6 and its
 leave-one-level-out error over the interior fit levels is below the base model's (the
 same rule as the one-mode diagnosis); a second cause is named in ``also`` when adding
-it to the first drops AICc by more than 6 again. Scores (both channels, in noise
+it to the first drops AICc by more than 6 again and lowers the cross-validated error. Scores (both channels, in noise
 units, ``err = sqrt(mean r^2)``):
 
 * ``gain``: base / extended leave-one-level-out error over the interior fit levels;
@@ -29,7 +29,8 @@ import numpy as np
 from cases.double_beam.fe_causes import EXTENSIONS, Combined
 from cases.double_beam.fe_levels import BASE_PARAMETERS, DoubleBeamLevels, Simulator
 from cases.double_beam.update_study import Headline, base_fit, base_parameters
-from inverse.fe_selection import held_out_errors, prediction_sd, select_extension
+from inverse.fe_selection import (cross_validate, held_out_errors, prediction_sd,
+                                  select_extension)
 from inverse.update import UpdateProblem, fit, noise_model
 
 __all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "fe_levels_table"]
@@ -126,7 +127,7 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
     sel = select_extension(base_problem, base, {c: (p, f) for c, (e, p, f) in fits.items()
                                                 if f is not None}, progress=say)
     cause = sel["cause"]
-    also = []
+    also, cv_ext = [], sel["cv_error"]
     if cause != "none":
         ext, prob, f = fits[cause]
         best_aicc = f.aicc
@@ -137,8 +138,15 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
             pair = Combined(ext, EXTENSIONS[other])
             pprob = _extension_problem(base_problem, fe, pair, base_pred, noise, top)
             pf = _fit_extension(pprob, pair, f)
-            if pf is not None and best_aicc - pf.aicc > 6.0:
-                also, best_aicc, fits["+".join((cause, other))] = [other], pf.aicc, (pair, pprob, pf)
+            if pf is None or best_aicc - pf.aicc <= 6.0:
+                continue
+            cv = cross_validate(pprob, pf)                  # and it must predict better
+            if cv < cv_ext:
+                also, cv_ext, best_aicc = [other], cv, pf.aicc
+                fits["+".join((cause, other))] = (pair, pprob, pf)
+                sel["evidence"][cause + "+" + other] = {
+                    "delta_aicc": base.aicc - pf.aicc, "chi2": pf.chi2, "cv_error": cv,
+                    "cv_gain": sel["base_cv_error"] / cv, "extra_parameters": pf.k - base.k}
         ext, prob, f = fits["+".join([cause] + also)]
     else:
         ext, prob, f = None, base_problem, base
@@ -169,8 +177,8 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
         "held_out_levels": [int(v) for v in data.level[held]],
         "noise": noise.to_dict(), "base_fit": base.to_dict(), "extended_fit": f.to_dict(),
         "evidence": sel["evidence"], "aicc_threshold": 6.0,
-        "base_error": sel["base_cv_error"], "extended_error": sel["cv_error"],
-        "gain": sel["gain"],
+        "base_error": sel["base_cv_error"], "extended_error": cv_ext,
+        "gain": sel["base_cv_error"] / cv_ext if cv_ext > 0 else math.inf,
         "base_error_held_out": errs_b, "extended_error_held_out": errs_e,
         "gain_held_out": (errs_b / errs_e) if errs_e > 0 else math.inf,
         "held_out": table, "acceptance": {"tolerance_hz": TOLERANCE_HZ,

@@ -21,7 +21,8 @@ Parameters (SI units; how each enters):
   :func:`inverse.fe_reference.joint_slip_at_resonance`). Node ``m`` carries the share
   ``w_m = k_m / K_T`` of R~ and of S, hence one ``phi_max`` for all
   (:mod:`cases.double_beam.joint_setup`).
-* ``zeta_v``: viscous modal damping ratio of every basis vector.
+* ``zeta_v``: viscous modal damping ratio of every basis vector (at its frequency after
+  the ``f0_hz`` scaling below).
 * ``f0_hz``: the stuck-glue natural frequency of the mode (Hz). The grip is calibrated
   to 252.0 Hz for each K_T (:func:`cases.double_beam.calibration.
   calibrate_clamp_length`); ``f0_hz`` then scales the whole stiffness (strips and glue)
@@ -75,7 +76,8 @@ class LinearPart:
     ``omega_k`` (its stuck-glue frequency, rad/s), ``load`` (reduced unit drive),
     ``grip`` (m), ``shares`` (w_m), ``gphi`` (glue slips of the mass-normalized mode),
     ``slips1`` (linear-inverse slips at level 1, m), ``lambda3`` (``int |phi_w|^3 dx``,
-    kg^-3/2 m), ``phi_drive`` (the mode at the drive DOF)."""
+    kg^-3/2 m), ``phi_drive`` (the mode at the drive DOF), ``response_row`` (the basis
+    at the response DOF: ``x_resp = response_row . q``)."""
 
     K_T: float
     grip: float
@@ -89,6 +91,7 @@ class LinearPart:
     lambda3: float
     phi_drive: float
     width: float
+    response_row: np.ndarray | None = None
 
     @property
     def a_ref(self) -> float:
@@ -192,7 +195,7 @@ class DoubleBeamLevels:
                           load=red.load(f), shares=kj / kj.sum(),
                           gphi=np.asarray(model.slip_matrix @ phi).ravel(), slips1=slips1,
                           lambda3=lam3, phi_drive=float(sign * phi[int(model.drive_dof)]),
-                          width=cfg.width)
+                          width=cfg.width, response_row=red.basis[int(model.response_dof)].copy())
 
     def joint(self, p: dict) -> dict:
         """The glue joint of parameter set ``p``: ``chi, R, K_T, beta, phi_max, F_S``
@@ -215,20 +218,28 @@ class DoubleBeamLevels:
         return {"chi": chi, "R": R, "K_T": K_T, "beta": beta, "phi_max": pm,
                 "F_S": float(sum(q.F_S for q in params)), "params": params, "linear": lin}
 
-    def predict(self, p: dict, extension=None) -> LevelPrediction:
-        """omega^2 and zeta at every level for parameter set ``p`` (module docstring);
-        ``extension``: a :class:`cases.double_beam.fe_causes.Extension` (its
-        parameters in ``p``) or None."""
+    def setup(self, p: dict, extension=None):
+        """The first-harmonic balance inputs of parameter set ``p``: ``(joint, red,
+        scale, forces, elements)`` (module docstring)."""
         j = self.joint(p)
         lin = j["linear"]
-        red = lin.red
-        red = replace(red, C=np.diag(2.0 * float(p["zeta_v"]) * red.omega))
         alpha = (2.0 * math.pi * float(p["f0_hz"])) ** 2 / lin.omega_k ** 2
+        # modal damping of the scaled basis: zeta_v of every (scaled) basis frequency
+        red = replace(lin.red, C=np.diag(2.0 * float(p["zeta_v"]) * math.sqrt(alpha)
+                                         * lin.red.omega))
         scale = np.full(self.n_levels, alpha)
         forces = self.force_scale * self.excitation
         elements = ()
         if extension is not None:
             scale, forces, elements = extension.apply(p, self, lin, scale, forces)
+        return j, red, scale, forces, elements
+
+    def predict(self, p: dict, extension=None) -> LevelPrediction:
+        """omega^2 and zeta at every level for parameter set ``p`` (module docstring);
+        ``extension``: a :class:`cases.double_beam.fe_causes.Extension` (its
+        parameters in ``p``) or None."""
+        j, red, scale, forces, elements = self.setup(p, extension)
+        lin = j["linear"]
         key = (round(math.log10(j["K_T"]), 9), getattr(extension, "cause", None))
         res = resonance_levels(red, j["params"], lin.load, forces, lin.k, scale=scale,
                                elements=elements, guess=self._warm.get(key))
