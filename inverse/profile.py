@@ -137,7 +137,8 @@ def profile_branch(task, problem: UpdateProblem) -> list:
     """One branch of a profile: ``task = (name, grid, start, free, level, stop,
     bounds)``; ``grid`` ordered outward from the optimum ``start`` (all values);
     ``free`` the other fitted parameters. Each point is fitted from its neighbour's
-    optimum and from ``start``, the better kept. The first point past ``level`` (chi2 at the
+    optimum and from ``start``, the better kept (optimizer tolerance 1e-6: chi2 to
+    about 1e-6 relative). The first point past ``level`` (chi2 at the
     interval's edge) is bracketed by 2 bisections; a branch still under ``level`` at the
     end of its grid goes on with doubling steps (at most 4) inside ``bounds``; it stops
     after the first point past ``stop`` or at a failed fit."""
@@ -152,7 +153,7 @@ def profile_branch(task, problem: UpdateProblem) -> list:
     def at(v, st):
         # two starts: the neighbour's optimum and the overall one (a sharp feature such
         # as a macro-slip onset makes the profile multimodal)
-        f = min((fit(problem, others, start=s, fixed={name: v}) for s in (st, start)),
+        f = min((fit(problem, others, start=s, fixed={name: v}, tol=1e-6) for s in (st, start)),
                 key=lambda f: (not f.success, f.chi2))
         if not f.success:
             return ProfilePoint(v, f.chi2)

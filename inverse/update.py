@@ -184,9 +184,10 @@ class Fit:
 
 
 def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | None = None,
-        max_nfev: int = 200, mask=None) -> Fit:
+        max_nfev: int = 200, mask=None, tol: float = 1e-8) -> Fit:
     """Minimize eq. (1) over the ``free`` parameters from ``start`` (default: each
-    parameter's ``start``), the others held at ``fixed`` / ``problem.fixed`` / start.
+    parameter's ``start``), the others held at ``fixed`` / ``problem.fixed`` / start;
+    ``tol``: the optimizer's ``xtol``, ``ftol`` and ``gtol``.
 
     Returns
     -------
@@ -220,7 +221,7 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
         return Fit(values=values, free=free, chi2=float(r @ r), n=r.size, cov=None, nfev=1,
                    seconds=time.perf_counter() - t0, success=True)
     res = least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-6,
-                        x_scale=1.0, max_nfev=max_nfev, xtol=1e-8, ftol=1e-8, gtol=1e-8)
+                        x_scale=1.0, max_nfev=max_nfev, xtol=tol, ftol=tol, gtol=tol)
     J = res.jac / step[None, :]
     try:
         cov = np.linalg.inv(J.T @ J)
