@@ -75,6 +75,11 @@ def acceptance_text(fe: dict) -> str:
         text += (f"; at level(s) {reach} the 95 % prediction half-width from the fit levels "
                  f"alone already exceeds the tolerance (the data's noise makes it unreachable "
                  f"there)")
+    z = ", ".join(f"{r['level']}: {r['extended_error_hz'] / r['extended_sd_hz']:+.1f} / "
+                  f"{r['extended_error_zeta_rel'] / r['extended_sd_zeta_rel']:+.1f}"
+                  for r in fe["held_out"] if r["extended_sd_hz"] > 0)
+    if z:
+        text += f"; errors in prediction sd (frequency / zeta) at level {z}"
     return text
 
 

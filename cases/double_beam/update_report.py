@@ -80,8 +80,9 @@ def summary(r: dict) -> dict:
         if pr is not None:
             lo, hi = pr.interval
             entry.update(interval=[lo, hi], status=pr.status)
-            if kind == "assumed" and pr.status == "determined":
-                entry["kind"] = "fitted (profile)"
+            if kind == "assumed" and abs(value - p.start) > 1e-9:
+                entry["kind"] = "profile minimum (grid)"
+                entry["assumed_value"] = p.start
         if name == "ln_phimax" and value >= r["micro_limit"]:
             entry.update(value=r["micro_limit"], kind="at the micro-slip limit (beta = 0)")
         params[name] = entry
@@ -111,12 +112,25 @@ def summary(r: dict) -> dict:
     sens = {}
     for name, s in r["sensitivity"].items():
         sens[name] = s
+    base_head = r["nominal"]
+    assumptions = [{"assumption": a["assumption"], "changes": a["changes"],
+                    "delta_chi2": a["chi2"] - best.chi2,
+                    "held_out_frequency_hz": a["headline"]["frequency_hz"],
+                    "held_out_zeta": a["headline"]["zeta"],
+                    "top_slip_over_phi_max": a["headline"]["top_slip_over_phi_max"],
+                    "shift_top_frequency_hz": (a["headline"]["frequency_hz"][-1]
+                                               - base_head["frequency_hz"][-1])
+                    if base_head["frequency_hz"] else None,
+                    "shift_top_zeta_rel": (a["headline"]["zeta"][-1] / base_head["zeta"][-1] - 1)
+                    if base_head["zeta"] else None}
+                   for a in r.get("assumptions", [])]
     return {"case": "double-beam", "source": str(data.source), "mode": r["settings"].mode_label,
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
             "derived": derived, "levels": levels, "misfit": statements,
             "tie": _tie_statement(data, mask), "micro_slip_chi2": micro.chi2,
-            "sensitivity": sens, "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
+            "sensitivity": sens, "assumptions": assumptions,
+            "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
             "confidence": r["settings"].confidence, "executor": r["executor"],
             "timing_s": r["timing_s"]}
 
@@ -157,6 +171,14 @@ def format_text(s: dict) -> str:
                      f"top held-out level moves {f['min'][-1]:.4f}..{f['max'][-1]:.4f} Hz, "
                      f"zeta {z['min'][-1]:.5f}..{z['max'][-1]:.5f}, top slip/phi_max "
                      f"{sv['top_slip_over_phi_max']['min']:.3g}..{sv['top_slip_over_phi_max']['max']:.3g}")
+    if s["assumptions"]:
+        lines.append("assumed properties changed (refitted): dchi2, top held-out level shift "
+                     "[Hz], [% zeta], top slip/phi_max")
+        for a in s["assumptions"]:
+            lines.append(f"  {a['assumption']:28s} {a['delta_chi2']:+9.2f} "
+                         f"{_fmt(a['shift_top_frequency_hz'], 3):>10s} "
+                         f"{_fmt(None if a['shift_top_zeta_rel'] is None else 100 * a['shift_top_zeta_rel'], 3):>8s}"
+                         f" {a['top_slip_over_phi_max']:9.3g}")
     t = s["timing_s"]
     lines.append(f"time: {t['total']:.1f} s ({s['executor']})")
     return "\n".join(lines)
@@ -181,6 +203,10 @@ def markdown(s: dict) -> str:
                      f"{v['top_slip_over_phi_max']['min']:.3g} .. "
                      f"{v['top_slip_over_phi_max']['max']:.3g}, R~ {v['R']['min']:.3g} .. "
                      f"{v['R']['max']:.3g}" for n, v in s["sensitivity"].items()) or "- none"
+    assumed = "\n".join(
+        f"| {a['assumption']} | {a['delta_chi2']:+.2f} | {_fmt(a['shift_top_frequency_hz'], 3)} | "
+        f"{_fmt(None if a['shift_top_zeta_rel'] is None else 100 * a['shift_top_zeta_rel'], 3)} | "
+        f"{a['top_slip_over_phi_max']:.3g} |" for a in s["assumptions"]) or "| (not run) | | | | |"
     d = s["derived"]
     return f"""# FE model updating of the double beam
 
@@ -222,6 +248,12 @@ to it, R~ scales as its -(chi+1) power, phi_max and F_S as its first power).
 {sens}
 
 ![profiles](update_profiles.png)
+
+## What the assumed properties change (each changed, the model refitted)
+
+| assumption | delta chi2 | top held-out frequency shift [Hz] | top held-out zeta shift [%] | top slip/phi_max |
+| --- | --- | --- | --- | --- |
+{assumed}
 """
 
 

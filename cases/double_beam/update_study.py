@@ -18,7 +18,9 @@ fitted to the measured levels by the nonlinear FE simulation itself.
    value is refitted there (it is then *fitted*);
 4. which parameters the data determine, and along the profiles of those they do not,
    the range of every headline figure: predicted frequency and damping at the
-   held-out levels and the top slip over ``phi_max``.
+   held-out levels and the top slip over ``phi_max``;
+5. the same figures after refitting with each assumed property changed
+   (:mod:`cases.double_beam.update_assumptions`).
 
 The force scale (N per excitation unit) is not a parameter: every simulated omega^2 and
 zeta is exactly invariant to it (:mod:`cases.double_beam.joint_setup`); R~, phi_max and
@@ -65,6 +67,7 @@ class UpdateSettings:
     kt_grid: tuple = KT_GRID
     phimax_step: float = 0.5
     profile_points: int = 4
+    assumptions: bool = True
 
     def __post_init__(self):
         if not (math.isfinite(self.force_scale) and self.force_scale > 0):
@@ -199,22 +202,36 @@ def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
     t_scan = time.perf_counter() - t0 - t_micro
     macro = best is not micro
     free = UPDATED_PARAMETERS if macro else BASE_PARAMETERS
-    kt = best.values["log10_kt"]                # K_T first: its branches take longest
-    grids = {"log10_kt": ([g for g in sorted(settings.kt_grid, reverse=True) if g < kt],
-                          [g for g in sorted(settings.kt_grid) if g > kt])}
-    grids.update({n: linear_grid(best, n, P[n], settings.profile_points) for n in free})
+    store = None if store is None else (store, problem_digest(data, mask, settings))
+    # K_T first (each value its own calibrated model): a better optimum there is adopted
+    # before the other profiles are taken around the final optimum
+    kt = best.values["log10_kt"]
+    kt_grid = {"log10_kt": ([g for g in sorted(settings.kt_grid, reverse=True) if g < kt],
+                            [g for g in sorted(settings.kt_grid) if g > kt])}
     t_fit = time.perf_counter() - t0
-    profiles = run_profiles(problem, best, grids, free, settings.confidence,
-                            executor=executor, progress=progress,
-                            store=None if store is None else
-                            (store, problem_digest(data, mask, settings)))
+    profiles = run_profiles(problem, best, kt_grid, free, settings.confidence,
+                            executor=executor, progress=progress, store=store)
+    low = min(profiles["log10_kt"].points, key=lambda p: p.chi2)
+    if low.values is not None and low.chi2 < best.chi2 - 1e-6:
+        again = fit(problem, free, start=low.values)        # K_T stays at that grid value
+        best = again if again.chi2 <= low.chi2 else fit(problem, (), start=low.values)
+    grids = {n: linear_grid(best, n, P[n], settings.profile_points) for n in free}
+    profiles.update(run_profiles(problem, best, grids, free, settings.confidence,
+                                 executor=executor, progress=progress, store=store))
     if not macro:
         profiles["ln_phimax"] = scan["ln_phimax"]
-    for pr in profiles.values():           # a profile found a better optimum: refit there
+    for pr in profiles.values():           # a profile found a better optimum: adopt it
         low = min(pr.points, key=lambda p: p.chi2)
         if low.values is not None and low.chi2 < best.chi2 - 1e-6:
             again = fit(problem, free, start=low.values)
             best = again if again.chi2 <= low.chi2 else fit(problem, (), start=low.values)
+    t_prof = time.perf_counter() - t0
+    assumed = []
+    if settings.assumptions:
+        from cases.double_beam.update_assumptions import assumption_sensitivity
+
+        assumed = assumption_sensitivity(data, mask, noise, P, best, settings.force_scale,
+                                         Headline, executor)
     sens = {}
     for name, pr in profiles.items():
         if pr.status != "determined":
@@ -228,7 +245,9 @@ def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
         "prediction": fe.predict(best.values), "micro_slip_prediction": fe.predict(micro.values),
         "nominal": problem.describe(best.values), "sensitivity": sens,
         "executor": executor if isinstance(executor, str) else executor.describe(),
+        "assumptions": assumed,
         "timing_s": {"base fit": t_micro, "phi_max scan and fit": t_scan,
-                     "profiles and refit": time.perf_counter() - t0 - t_fit,
+                     "profiles and refit": t_prof - t_fit,
+                     "assumptions": time.perf_counter() - t0 - t_prof,
                      "total": time.perf_counter() - t0},
     }
