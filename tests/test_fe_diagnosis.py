@@ -84,3 +84,29 @@ def test_update_command_rejects_bad_input(capsys):
     with pytest.raises(SystemExit) as e:
         main(["update", "--case", "double-beam", "--force-scale", "-1"])
     assert e.value.code == 2
+
+
+@pytest.mark.slow
+def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
+    """A reduced run (3 K_T values, 2 profile points per side): the files, every
+    parameter's kind and status, and the tie statement with the data's own numbers
+    (loss of omega^2 273.1 rad^2/s^2 = 0.73 x 2 omega^2 dzeta over levels 1-7)."""
+    from cases.double_beam.update_report import summary, write_update
+    from cases.double_beam.update_study import UpdateSettings, run_update
+
+    r = run_update(UpdateSettings(kt_grid=(7.0, 8.0, 9.0), profile_points=2,
+                                  assumptions=False), store=str(tmp_path / "profiles"))
+    s = summary(r)
+    assert s["fit_levels"] == list(range(1, 8)) and s["held_out_levels"] == [8, 9, 10]
+    assert s["tie"]["loss_omega2"] == pytest.approx(2506770.0 - 2506496.94)
+    assert s["tie"]["ratio"] == pytest.approx(0.726, abs=0.002)
+    assert s["tie"]["ratio"] < s["tie"]["iwan_minimum"]
+    assert s["fit"]["chi2"] > 3 * s["fit"]["dof"]              # the base model misfits
+    for name in ("chi", "ln_dc1", "zeta_v", "f0_hz"):
+        assert s["parameters"][name]["kind"] == "fitted"
+        assert s["parameters"][name]["status"] in ("determined", "bounded below",
+                                                   "bounded above", "not determined")
+    files = write_update(r, tmp_path)
+    assert all(f.exists() for f in files)
+    model = json.loads((tmp_path / "updated_model.json").read_text())
+    assert model["joint"]["K_T_N_per_m"] in (1e7, 1e8, 1e9)

@@ -27,7 +27,8 @@ import math
 import numpy as np
 
 from cases.double_beam.fe_causes import EXTENSIONS, Combined
-from cases.double_beam.fe_levels import BASE_PARAMETERS, DoubleBeamLevels, Simulator
+from cases.double_beam.fe_levels import (BASE_PARAMETERS, DoubleBeamLevels, Simulator,
+                                         level_entries)
 from cases.double_beam.update_study import Headline, base_fit, base_parameters
 from inverse.fe_selection import (cross_validate, held_out_errors, prediction_sd,
                                   select_extension)
@@ -76,16 +77,7 @@ def _fit_extension(problem, ext, base):
 def fe_levels_table(data, mask, base_pred, ext_pred) -> list:
     """One entry per level: ``level``, ``held_out``, ``measured``, ``base``, ``extended``
     (each ``{frequency_hz, zeta}``)."""
-    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
-    rows = []
-    for i, lv in enumerate(data.level):
-        rows.append({"level": int(lv), "held_out": bool(not mask[i]),
-                     "measured": {"frequency_hz": float(f_meas[i]), "zeta": float(data.zeta[i])},
-                     "base": {"frequency_hz": float(base_pred.frequency_hz[i]),
-                              "zeta": float(base_pred.zeta[i])},
-                     "extended": {"frequency_hz": float(ext_pred.frequency_hz[i]),
-                                  "zeta": float(ext_pred.zeta[i])}})
-    return rows
+    return level_entries(data, mask, {"base": base_pred, "extended": ext_pred})
 
 
 def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,

@@ -59,7 +59,7 @@ from inverse.iwan_modal import b_tilde, r_tilde
 from joints.iwan import IwanParameters
 
 __all__ = ["BASE_PARAMETERS", "DEFAULT_KT", "LinearPart", "LevelPrediction",
-           "DoubleBeamLevels", "Simulator"]
+           "DoubleBeamLevels", "Simulator", "level_entries"]
 
 #: The base model's parameters, in the order the fits use.
 BASE_PARAMETERS = ("chi", "ln_dc1", "zeta_v", "f0_hz")
@@ -265,3 +265,18 @@ class Simulator:
 
     def reset(self) -> None:
         self.fe.reset()
+
+
+def level_entries(data, mask, models: dict) -> list:
+    """One dict per level of ``data``: ``level``, ``held_out`` (not in ``mask``),
+    ``measured`` and each of ``models`` (name -> LevelPrediction), each as
+    ``{frequency_hz, zeta}``."""
+    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
+    rows = []
+    for i, lv in enumerate(data.level):
+        row = {"level": int(lv), "held_out": bool(not mask[i]),
+               "measured": {"frequency_hz": float(f_meas[i]), "zeta": float(data.zeta[i])}}
+        for name, pred in models.items():
+            row[name] = {"frequency_hz": float(pred.frequency_hz[i]), "zeta": float(pred.zeta[i])}
+        rows.append(row)
+    return rows

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cases.double_beam.fe_levels import level_entries
 from cases.double_beam.update_study import BASE_PARAMETERS
 from inverse.iwan_modal import kappa_ratio
 from runs.jsonio import to_jsonable
@@ -51,19 +52,14 @@ def _tie_statement(data, mask) -> dict:
 
 
 def _levels(data, mask, pred, noise) -> list:
-    f = np.sqrt(data.omega2) / (2 * math.pi)
-    sig_f = noise.sigma_omega2 / (2 * (2 * math.pi) ** 2 * f)
-    rows = []
-    for i, lv in enumerate(data.level):
-        rows.append({"level": int(lv), "held_out": bool(not mask[i]),
-                     "measured": {"frequency_hz": float(f[i]), "zeta": float(data.zeta[i])},
-                     "model": {"frequency_hz": float(pred.frequency_hz[i]),
-                               "zeta": float(pred.zeta[i])},
-                     "error_hz": float(pred.frequency_hz[i] - f[i]),
-                     "error_zeta_rel": float(pred.zeta[i] / data.zeta[i] - 1.0),
-                     "error_sigma": [float((pred.frequency_hz[i] - f[i]) / sig_f[i]),
-                                     float((pred.zeta[i] - data.zeta[i]) / noise.sigma_zeta[i])],
-                     "slip_over_phi_max": float(pred.slip_over_phi_max[i])})
+    rows = level_entries(data, mask, {"model": pred})
+    for i, row in enumerate(rows):
+        f, fm = row["measured"]["frequency_hz"], row["model"]["frequency_hz"]
+        sig_f = noise.sigma_omega2[i] / (2 * (2 * math.pi) ** 2 * f)
+        row.update(error_hz=fm - f, error_zeta_rel=float(pred.zeta[i] / data.zeta[i] - 1.0),
+                   error_sigma=[(fm - f) / sig_f,
+                                float((pred.zeta[i] - data.zeta[i]) / noise.sigma_zeta[i])],
+                   slip_over_phi_max=float(pred.slip_over_phi_max[i]))
     return rows
 
 
