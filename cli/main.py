@@ -30,6 +30,7 @@ COMMANDS = [
     "uncertainty",
     "diagnose",
     "backbone",
+    "update",
 ]
 
 

@@ -124,6 +124,9 @@ def format_text(result: dict, source: str) -> str:
         from cases.double_beam.fe_check import format_fe_check
 
         lines.extend(format_fe_check(r["fe_check"]))
+    if "fe" in r:
+        from cases.double_beam.fe_diagnosis_report import format_fe
+        lines.extend(format_fe(r["fe"]))
     return "\n".join(lines)
 
 
@@ -233,6 +236,9 @@ def run(args) -> int:
     if args.case in CASES:  # a model case: its FE-level check
         level1 = data.for_mode(result["mode"]) if "mode" in result else data
         result["fe_check"] = fe_check(args.case, float(level1.omega2[0]))
+    if args.case == "double-beam":  # the FE model refitted, base vs extended (issue 13)
+        from cases.double_beam.fe_diagnosis_report import add_fe_diagnosis
+        add_fe_diagnosis(result, data, out=args.out)
     if args.out:
         write_report(result, Path(args.out), Path(source).name if args.file else source)
     if args.json:
