@@ -96,6 +96,33 @@ class IwanParameters:
             raise ValueError(f"F_S must be > 0, got {self.F_S:g}")
         if self.beta < 0.0:
             raise ValueError(f"beta must be >= 0, got {self.beta:g}")
+        self._check_representable()
+
+    def _check_representable(self) -> None:
+        """phi_max and R must be positive normal doubles and S finite.
+
+        Each input may be a fine number while a derived one is not: ``K_T = 1e300`` N/m
+        with ``F_S = 400`` N gives ``phi_max ~ 4e-297`` m, whose power ``chi+2`` underflows
+        and ``R = F_S (chi+1)/(phi_max^(chi+2) ...)`` would be ~1e446 N/m^1.5, beyond
+        double precision. Such a joint cannot be computed with, so it is refused here,
+        with the numbers, instead of failing later as a division by zero or an infinity.
+        """
+        tiny = np.finfo(float).tiny
+        try:
+            phi_max = self.phi_max
+            R = self.R if phi_max >= tiny else math.nan
+            S = self.S if phi_max >= tiny else math.nan
+        except (ZeroDivisionError, OverflowError):
+            phi_max, R, S = self.phi_max, math.nan, math.nan
+        where = (f"chi = {self.chi:g}, K_T = {self.K_T:g} N/m, F_S = {self.F_S:g} N, "
+                 f"beta = {self.beta:g}")
+        if not (math.isfinite(phi_max) and phi_max >= tiny):
+            raise ValueError(f"{where} give phi_max = F_S (1+beta)/(K_T (beta + (chi+1)/"
+                             f"(chi+2))) = {phi_max:g} m, outside double precision")
+        if not (math.isfinite(R) and R >= tiny and math.isfinite(S)):
+            raise ValueError(f"{where} give phi_max = {phi_max:g} m and a density R = F_S "
+                             f"(chi+1)/(phi_max^(chi+2) (beta + (chi+1)/(chi+2))) outside "
+                             f"double precision (paper eq. 42)")
 
     @property
     def _c(self) -> float:

@@ -28,6 +28,7 @@ from fe.harmonic_balance import continuation
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
 from runs.campaign import Campaign, CampaignResult, LevelResult, NewmarkProtocol, PaperProtocol
+from runs import interrupt
 from runs.executor import ExecutorSpec, run_sweep
 from runs.store import open_manifest, write_manifest
 
@@ -183,7 +184,8 @@ def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: i
     F = float(campaign.force[level])
     t0 = time.perf_counter()
     runner = _LEVEL_RUNNERS[campaign.protocol.name]
-    rec, slip, amp, work = runner(model, bank, campaign, F, tick)
+    with interrupt.deferred():   # Ctrl-C between lines only, never inside compiled code
+        rec, slip, amp, work = runner(model, bank, campaign, F, interrupt.Ticker(tick))
     return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)
 
 
