@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ident.errors import InputError
+from ident.errors import InputError, text_file
 from ident.poles import QUANTITIES
 
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
@@ -98,7 +98,7 @@ def read_frf_csv(path) -> FRFSet:
     meta: dict[str, tuple[int, str]] = {}
     header = None
     rows = []
-    with open(path, encoding="utf-8-sig") as fh:
+    with text_file(path, src) as fh:
         for lineno, text in enumerate(fh, start=1):
             s = text.strip()
             if not s:
@@ -216,13 +216,46 @@ def _node_dir(label: str, default_node: int) -> tuple[int, int]:
     return int(m.group(1)), _DIR_CODE.get(m.group(2), 0) if m.group(2) else 0
 
 
+def _uff_delimiters(data: bytes) -> list[int]:
+    """Byte offsets of the ``    -1`` lines that open and close data sets (pyuff's rule:
+    the token followed by a line end, the end of the file, or blanks to column 80)."""
+    found, at = [], data.find(b"    -1")
+    while at != -1:
+        after = data[at + 6:at + 80]
+        if not after or after[:1] in (b"\n", b"\r") or (len(after) == 74 and not after.strip()):
+            found.append(at)
+        at = data.find(b"    -1", at + 1)
+    return found
+
+
+def _check_uff_structure(src: str, data: bytes) -> list[tuple[int, int]]:
+    """(first line, type) of every data set; a data set without its closing delimiter
+    (a file cut inside it) is refused with its number, type and first line."""
+    marks = _uff_delimiters(data)
+    sets = []
+    for k in range(0, len(marks), 2):
+        line = data.count(b"\n", 0, marks[k]) + 1
+        head = data[marks[k]:marks[k] + 200].splitlines()
+        kind = head[1][:6].decode("ascii", "replace").strip() if len(head) > 1 else "?"
+        if k + 1 == len(marks):
+            raise InputError(f"{src}:{line}: data set {k // 2 + 1} (type {kind or '?'}) is cut "
+                             "off: no closing '    -1' line (truncated file?)")
+        sets.append((line, kind))
+    return sets
+
+
 def read_frf_uff(path) -> FRFSet:
-    """Read the FRFs (data sets 58, function type 4) of a universal file."""
+    """Read the FRFs (data sets 58, function type 4) of a universal file.
+
+    A file cut inside a data set, or a data set 58 holding fewer values than its record 7
+    announces, is refused (``FILE:LINE: data set K ...``): a truncated file must not give
+    fewer response points or lines without a word."""
     import pyuff
 
     src = str(path)
     if not Path(path).is_file():
         raise InputError(f"{src}: no such file")
+    layout = _check_uff_structure(src, Path(path).read_bytes())
     try:
         with contextlib.redirect_stdout(io.StringIO()):
             uff = pyuff.UFF(src)
@@ -233,6 +266,14 @@ def read_frf_uff(path) -> FRFSet:
         raise InputError(f"{src}: not a readable universal file ({exc})") from None
     if isinstance(sets, dict):
         sets = [sets]
+    for i, s in zip(idx, sets):
+        n = int(s.get("num_pts", -1))
+        got = np.size(s.get("data"))
+        if got != n or np.size(s.get("x")) != n:
+            line = layout[i][0] if i < len(layout) else "?"
+            raise InputError(f"{src}:{line}: data set {i + 1} (58, response point "
+                             f"{_label(s.get('rsp_node', 0), s.get('rsp_dir', 0))}) holds "
+                             f"{got} of the {n} values its record 7 announces")
     sets = [s for s in sets if int(s.get("func_type", 0)) == 4]
     if not sets:
         raise InputError(f"{src}: no FRF (data set 58, function type 4) in the file")
@@ -263,6 +304,8 @@ def read_frf_uff(path) -> FRFSet:
             break
     if np.any(np.diff(x) <= 0):
         raise InputError(f"{src}: frequencies must be strictly increasing")
+    if x.size < 2 or not x[0] > 0:
+        raise InputError(f"{src}: needs at least 2 frequencies, all > 0 Hz")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(frf))):
         raise InputError(f"{src}: non-finite frequency or FRF value")
     ref = refs.pop()

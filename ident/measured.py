@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ident.errors import InputError
+from ident.errors import InputError, text_file
 from ident.modal_data import MeasuredData
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
@@ -68,16 +68,30 @@ def _parse_int(text: str, source: str, line: int, column: str) -> int:
     value = _parse_float(text, source, line, column)
     if value != round(value):
         _fail(source, line, column, f"must be an integer, got {text!r}")
+    if abs(value) > 2.0 ** 53:  # beyond that a float holds no exact integer (nor does C long)
+        _fail(source, line, column, f"integer out of range (|value| <= 2^53), got {text!r}")
     return int(round(value))
+
+
+def _csv_rows(reader, source: str):
+    """The reader's rows; its own errors (a field over the size limit, a bad quote)
+    become one-line input errors."""
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            _fail(source, reader.line_num, "1", f"not a CSV line ({exc})")
 
 
 def _read_rows(path: Path, source: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header names and (line number, fields) of the non-blank data rows."""
-    with open(path, newline="", encoding="utf-8-sig") as fh:
+    with text_file(path, source, newline="") as fh:
         reader = csv.reader(fh)
         header: list[str] | None = None
         rows: list[tuple[int, list[str]]] = []
-        for fields in reader:
+        for fields in _csv_rows(reader, source):
             lineno = reader.line_num
             if not any(f.strip() for f in fields):
                 continue

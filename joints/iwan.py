@@ -161,13 +161,19 @@ class IwanParameters:
             raise ValueError(f"phi_max must be > 0, got {phi_max:g}")
         if S < 0.0:
             raise ValueError(f"S must be >= 0, got {S:g}")
-        continuous = R * phi_max ** (chi + 1.0) / (chi + 1.0)
-        return cls(
-            chi=chi,
-            K_T=continuous + S,
-            F_S=R * phi_max ** (chi + 2.0) / (chi + 2.0) + S * phi_max,
-            beta=S / continuous,
-        )
+        tiny = np.finfo(float).tiny
+        try:
+            continuous = R * phi_max ** (chi + 1.0) / (chi + 1.0)
+            F_S = R * phi_max ** (chi + 2.0) / (chi + 2.0) + S * phi_max
+            beta = S / continuous
+        except (OverflowError, ZeroDivisionError):
+            continuous = F_S = beta = math.nan
+        if not all(math.isfinite(v) and v >= tiny for v in (continuous, F_S)) \
+                or not math.isfinite(beta):
+            raise ValueError(f"R = {R:g}, chi = {chi:g}, phi_max = {phi_max:g} m, S = {S:g} N/m "
+                             f"give K_T or F_S = R phi_max^(chi+2)/(chi+2) + S phi_max outside "
+                             f"double precision")
+        return cls(chi=chi, K_T=continuous + S, F_S=F_S, beta=beta)
 
 
 # --------------------------------------------------------------------------- density

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cli import validate
 from cases.registry import CASES, MEASURED_DATA, fe_check
 from inverse.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
 from ident.errors import InputError
@@ -224,6 +225,8 @@ in units of the noise level (grey band: +/- 2).
 
 
 def run(args) -> int:
+    if args.out:
+        validate.output_dir(args.out, "--out")   # cli.validate: one output-path rule
     data, truth = load(args.file, args.case)
     source = args.file or args.case
     result = diagnose(data, mode=args.mode, cv_all=args.cv_all)
