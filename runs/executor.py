@@ -323,6 +323,21 @@ def _connect(spec):
     return client, cluster, True
 
 
+def _quiet_logs() -> None:
+    import logging
+
+    for name in ("distributed", "asyncio", "tornado"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+def _local_worker_setup() -> None:
+    """In a worker of a local cluster: the terminal's Ctrl-C is for the parent, which
+    stops the cluster (and reports every task's error itself), so no own handler and no
+    closing chatter on stderr."""
+    interrupt.ignore_sigint()
+    _quiet_logs()
+
+
 def _run_dask(func, chunks, spec, shared):
     """Yield ``(start, results)`` per chunk as the cluster finishes them."""
     from distributed import as_completed
@@ -330,6 +345,8 @@ def _run_dask(func, chunks, spec, shared):
     client, cluster, close = _connect(spec)
     futures = []
     try:
+        if cluster is not None:   # our own workers: Ctrl-C and errors are reported here
+            client.run(_local_worker_setup)
         extra = ()
         if shared is not _NO_SHARED:
             extra = (client.scatter(shared, broadcast=True, hash=False),)
@@ -338,10 +355,16 @@ def _run_dask(func, chunks, spec, shared):
         start_of = {fut.key: start for fut, (start, _) in zip(futures, chunks)}
         for fut in as_completed(futures):
             yield start_of[fut.key], fut.result()
+    except BaseException:
+        # an interrupt or error: the cluster's closing chatter (workers killed, scattered
+        # data lost, pending messages) is expected, not news
+        _quiet_logs()
+        raise
     finally:
-        for fut in futures:
-            if not fut.done():
-                fut.cancel()
+        if cluster is None:   # a remote cluster keeps running: cancel what is left
+            for fut in futures:
+                if not fut.done():
+                    fut.cancel()
         if close:
             client.close()
         if cluster is not None:

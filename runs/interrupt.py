@@ -31,7 +31,7 @@ import threading
 from contextlib import contextmanager
 
 __all__ = ["install", "uninstall", "deferred", "checkpoint", "requested", "Ticker",
-           "caused_by_interrupt", "sigint_blocked", "quiet"]
+           "caused_by_interrupt", "sigint_blocked", "quiet", "ignore_sigint"]
 
 _state = {"installed": False, "previous": None, "pending": False, "requested": False,
           "depth": 0, "quiet": False}
@@ -123,6 +123,10 @@ def sigint_blocked():
     if mask is None:  # pragma: no cover - not POSIX
         yield
         return
+    # multiprocessing's resource tracker, when it starts, unblocks SIGINT in the thread
+    # that starts it (bpo-33613, Python 3.11): start it before the block
+    from multiprocessing import resource_tracker
+    resource_tracker.ensure_running()
     old = mask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
@@ -143,3 +147,9 @@ class Ticker:
         if self.bar is not None:
             self.bar.update(n)
         checkpoint()
+
+
+def ignore_sigint() -> None:
+    """Ignore SIGINT in this process (a worker whose parent handles Ctrl-C; main thread)."""
+    if _main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
