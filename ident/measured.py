@@ -230,9 +230,11 @@ def read_measured(path) -> MeasuredData:
             _fail(source, lines[j], name,
                   f"mode {m}: {name} of level {level[j]} ({e[bad[0] + 1]:g}) does not "
                   f"exceed that of level {level[i]} ({e[bad[0]]:g})")
-        ratio = e[1:] / e[:-1]
-        median = np.median(ratio)
-        if np.any(np.abs(ratio / median - 1.0) > RATIO_TOLERANCE):
+        with np.errstate(over="ignore", invalid="ignore"):   # extreme but valid values
+            ratio = e[1:] / e[:-1]
+            median = np.median(ratio)
+            uneven = np.any(np.abs(ratio / median - 1.0) > RATIO_TOLERANCE)
+        if uneven:
             warnings.append(
                 f"{source}: mode {m}: {name} ratios between successive levels are not "
                 f"constant ({ratio.min():.3g} to {ratio.max():.3g}, median {median:.3g})")
