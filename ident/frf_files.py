@@ -31,6 +31,7 @@ import contextlib
 import io
 import math
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -256,8 +257,10 @@ def read_frf_uff(path) -> FRFSet:
     if not Path(path).is_file():
         raise InputError(f"{src}: no such file")
     layout = _check_uff_structure(src, Path(path).read_bytes())
-    try:
-        with contextlib.redirect_stdout(io.StringIO()):
+    try:   # pyuff prints, and warns on non-finite values (refused below with the file)
+        with contextlib.redirect_stdout(io.StringIO()), warnings.catch_warnings(), \
+                np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
             uff = pyuff.UFF(src)
             types = np.asarray(uff.get_set_types())
             idx = [int(i) for i in np.flatnonzero(types == 58)]
