@@ -19,7 +19,8 @@ lines to N characters and `` ...``), ``stderr`` (show stderr too).
     .venv/bin/python docs/examples.py --check    # compare only; exit 1 and a diff if drifted
     .venv/bin/python docs/examples.py --check --fast
 
-Comparisons ignore timings (numbers followed by ``s``) and the scratch folder's path;
+Comparisons ignore timings (numbers followed by ``s``); the scratch folder's and the
+repository's paths are cut from the output;
 everything else must match to the last printed digit. Numbers dominated by round-off
 (the convergence table's finest meshes) can differ on another CPU or BLAS; regenerate
 there.
@@ -222,7 +223,8 @@ def main(argv=None) -> int:
                     print(f"skipped (no off-screen GL): {ex.commands[0][1]}", file=sys.stderr)
                     continue
             t0 = time.perf_counter()
-            got = [line.replace(str(folder) + "/", "") for line in run_example(ex, session)]
+            got = [line.replace(str(folder) + "/", "").replace(str(ROOT) + "/", "")
+                   for line in run_example(ex, session)]
             print(f"ran {ex.commands[-1][1]} ({time.perf_counter() - t0:.1f} s)",
                   file=sys.stderr)
             if normalized(got) != normalized(ex.lines):
