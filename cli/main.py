@@ -50,6 +50,7 @@ COMMANDS = [
     "reproduce",
     "uncertainty",
     "diagnose",
+    "backbone",
 ]
 
 #: A command-line word that is a number, not an option: argparse's own pattern misses

@@ -183,7 +183,8 @@ def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: i
     """Compute one force level of ``campaign`` (all lines), from rest."""
     F = float(campaign.force[level])
     t0 = time.perf_counter()
-    runner = _LEVEL_RUNNERS[campaign.protocol.name]
+    # a protocol defined elsewhere brings its own runner (runs.response_control)
+    runner = getattr(campaign.protocol, "run_level", None) or _LEVEL_RUNNERS[campaign.protocol.name]
     with interrupt.deferred():   # Ctrl-C between lines only, never inside compiled code
         rec, slip, amp, work = runner(model, bank, campaign, F, interrupt.Ticker(tick))
     return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)

@@ -15,6 +15,7 @@ import numpy as np
 
 from cli import validate
 from cases.registry import CASES, MEASURED_DATA, fe_check
+from cli.series_options import add_series_arguments, series_from_args
 from inverse.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
 from ident.errors import InputError
 from runs.jsonio import print_json, to_jsonable
@@ -38,8 +39,7 @@ def register(subparsers) -> None:
             "else none. Errors are rms held-out prediction errors in noise units."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    parser.add_argument("file", metavar="FILE", nargs="?", default=None,
-                        help="measured-data CSV file (or use --case)")
+    add_series_arguments(parser, required=False)   # FILE...: a table or FRF files
     parser.add_argument("--case", default=None, metavar="NAME",
                         help="instead of FILE: 'double-beam' (the shipped paper data) or "
                              "'synthetic:CAUSE:SEED' (a simulated test hiding CAUSE)")
@@ -54,7 +54,7 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def load(file: str | None, case: str | None):
+def load(file: str | None, case: str | None, args=None):
     """The MeasuredData to diagnose, and the hidden truth for synthetic cases.
 
     ``FILE`` alone, ``--case`` alone (its shipped data or a synthetic case), or ``FILE``
@@ -66,7 +66,7 @@ def load(file: str | None, case: str | None):
         if case is not None and case not in CASES:
             raise InputError(f"--case {case!r} with FILE: the case must be a model "
                              f"({', '.join(CASES)})")
-        return read_measured(file), None
+        return (series_from_args(args) if args is not None else read_measured(file)), None
     if case in MEASURED_DATA:
         return read_measured(MEASURED_DATA[case]), None
     parts = case.split(":")
@@ -227,7 +227,8 @@ in units of the noise level (grey band: +/- 2).
 def run(args) -> int:
     if args.out:
         validate.output_dir(args.out, "--out")   # cli.validate: one output-path rule
-    data, truth = load(args.file, args.case)
+    args.file = " ".join(args.files) or None
+    data, truth = load(args.file, args.case, args)
     source = args.file or args.case
     result = diagnose(data, mode=args.mode, cv_all=args.cv_all)
     if truth is not None:

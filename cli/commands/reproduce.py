@@ -67,6 +67,9 @@ def register(subparsers) -> None:
                         help="only the lines of the identification bands of modes 2, 4, 6")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_executor_arguments(parser)     # --workers/--scheduler/--executor: where levels run
+    parser.add_argument("--control", choices=("force", "response"), default="force",
+                        help="response: each level holds the drive-point amplitude "
+                             "(cases.response_study; iwanfe backbone)")
     db = parser.add_argument_group("double-beam only")
     db.add_argument("--data", default=argparse.SUPPRESS, metavar="FILE",
                     help="measured-data CSV (default: the shipped paper data)")
@@ -309,4 +312,7 @@ TARGETS = {"lumped": _run_lumped, "double-beam": _run_double_beam}
 
 
 def run(args) -> int:
+    if args.control == "response":
+        from cli.commands.backbone import run_response_control
+        return run_response_control(args)
     return TARGETS[args.target](args)

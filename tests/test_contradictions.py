@@ -1,0 +1,88 @@
+"""Contradictions with the Iwan model (inverse/contradictions.py), on series made from
+the exact describing function of a four-parameter Iwan joint (joints.describing), with
+seeded random parameters and noise the checks never see."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ident.modal_data import MeasuredData
+from inverse.contradictions import MIN_TIE, iwan_contradictions, noise_levels
+from joints.describing import describing_function, kappa1, kappa2_exact
+from joints.iwan import IwanParameters
+
+
+def iwan_series(rng, n=10, extra_zeta=0.0, extra_omega2=0.0, top=0.8, response=False):
+    """One mode on one Iwan joint: omega^2 = k0 + k_in(A), Delta c = k_q(A) (unit modal
+    mass, paper eq. 30-31), zeta from eq. 45 with its factor 2; A doubling per level up
+    to ``top`` phi_max; plus optional extra terms growing like (A/A_top)^2."""
+    chi = rng.uniform(-0.8, -0.1)
+    p = IwanParameters(chi=chi, K_T=rng.uniform(2e4, 1e5), F_S=rng.uniform(50, 500),
+                       beta=rng.uniform(0.5, 5))
+    A = top * p.phi_max * 2.0 ** np.arange(1 - n, 1)
+    k_in, k_q = describing_function(p, A)
+    k0 = rng.uniform(5e5, 2e6)
+    s = (A / A[-1]) ** 2
+    omega2 = k0 + k_in + extra_omega2 * k0 * s
+    c_n = 2 * rng.uniform(0.002, 0.01) * math.sqrt(k0 + p.K_T)
+    zeta = c_n / (2 * np.sqrt(omega2)) + k_q / (2 * omega2) + extra_zeta * s
+    sw, sz = 1e-6 * omega2, 1e-6 * np.ones(n)
+    omega2 = omega2 + sw * rng.standard_normal(n)
+    zeta = zeta + sz * rng.standard_normal(n)
+    return chi, MeasuredData(
+        level=np.arange(1, n + 1), excitation=A / A[0], omega2=omega2, zeta=zeta, mode=None,
+        run_order=None, response_amplitude=A if response else None,
+        omega2_std=sw, zeta_std=sz, control=np.full(n, "response" if response else "force"))
+
+
+def test_least_tie_is_the_chi_to_zero_limit_of_the_exact_kappas():
+    chis = np.linspace(-0.99, -1e-4, 400)
+    ratio = np.array([kappa2_exact(1.0, c) / abs(kappa1(1.0, c)) for c in chis])
+    assert np.all(np.diff(ratio) < 0)                       # falls with chi
+    assert ratio.min() > MIN_TIE and ratio[-1] == pytest.approx(MIN_TIE, rel=1e-3)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_micro_slip_iwan_series_contradict_nothing(seed):
+    chi, d = iwan_series(np.random.default_rng(seed))
+    assert iwan_contradictions(d, chi=chi) == []
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_extra_damping_breaks_the_micro_slip_tie(seed):
+    rng = np.random.default_rng(100 + seed)
+    chi, d = iwan_series(rng, extra_zeta=rng.uniform(0.01, 0.03))
+    kinds = [c.kind for c in iwan_contradictions(d)]
+    assert kinds == ["tie-violated"]
+    c = iwan_contradictions(d)[0]
+    # the numbers: the least loss is 3 pi/4 x the damping growth, the loss is the data's
+    assert c.numbers["least_loss_micro_slip"] == pytest.approx(
+        MIN_TIE * c.numbers["joint_damping_growth"])
+    assert c.numbers["omega2_loss"] == pytest.approx(d.omega2[0] - d.omega2[-1])
+
+
+def test_response_controlled_rise_with_fourfold_damping_is_stated_with_both_numbers():
+    """Issue 14: frequency +0.3 % while damping grows 4x, response-controlled."""
+    rng = np.random.default_rng(7)
+    n = 8
+    A = 1e-5 * 2.0 ** np.arange(n)
+    f = 80.0 * (1 + 0.003 * (np.arange(n) / (n - 1)) ** 2)
+    zeta = 0.005 * (1 + 3 * (np.arange(n) / (n - 1)) ** 1.5)
+    omega2 = (2 * np.pi * f) ** 2 * (1 + 2e-7 * rng.standard_normal(n))
+    d = MeasuredData(level=np.arange(1, n + 1), excitation=np.full(n, 1.0), omega2=omega2,
+                     zeta=zeta, mode=None, run_order=None, response_amplitude=A,
+                     control=np.full(n, "response"))
+    found = iwan_contradictions(d)
+    rise = [c for c in found if c.kind == "frequency-rises"]
+    assert rise, found
+    text = rise[0].statement
+    assert "+0.3 %" in text and "4x" in text, text
+    assert noise_levels(d).source == "scatter"
+
+
+def test_chi_outside_the_iwan_range():
+    chi, d = iwan_series(np.random.default_rng(3))
+    assert [c.kind for c in iwan_contradictions(d, chi=0.69)] == ["chi-out-of-range"]
+    assert "0.69" in iwan_contradictions(d, chi=0.69)[0].statement
