@@ -198,6 +198,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="compare only; exit 1 on drift")
     ap.add_argument("--fast", action="store_true", help="skip the examples marked slow")
+    ap.add_argument("--only", metavar="TEXT", help="only the examples whose commands hold TEXT")
     ap.add_argument("--make-uff", metavar="FILE", help="write the identify example's UFF file")
     ap.add_argument("--readme", default=str(README), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -215,7 +216,8 @@ def main(argv=None) -> int:
         session = Session(folder)
         gl = None
         for ex in examples:
-            if args.fast and ex.slow:
+            if (args.fast and ex.slow) or (args.only and not any(
+                    args.only in c for _, c in ex.commands)):
                 continue
             if ex.needs_gl:
                 gl = gl_available() if gl is None else gl
@@ -243,7 +245,7 @@ def main(argv=None) -> int:
             last = ex.fence_close
     out += lines[last:]
     result = "\n".join(out)
-    if not args.fast:   # every example's times are from this run
+    if not (args.fast or args.only):   # every example's times are from this run
         result = MACHINE.sub(lambda m: m.group(1) + machine + m.group(3), result)
     path.write_text(result, encoding="utf-8")
     print(f"{path}: {len(new)} examples rewritten, {len(drift)} had drifted", file=sys.stderr)
