@@ -41,7 +41,6 @@ import contextlib
 import io
 import math
 import re
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,6 +50,7 @@ from ident.errors import InputError, text_file
 from ident.frf_header import (CONTROLS, HEADER_KEYS, header_values, id_line_values,
                               parse_control, parse_excitation, parse_run_order)
 from ident.poles import QUANTITIES
+from ident.uff_sets import read_uff_sets
 
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
 _UFF_ORDINATE_CODE = {v: k for k, v in _UFF_ORDINATE.items()}
@@ -257,66 +257,14 @@ def _node_dir(label: str, default_node: int) -> tuple[int, int]:
     return int(m.group(1)), _DIR_CODE.get(m.group(2), 0) if m.group(2) else 0
 
 
-def _uff_delimiters(data: bytes) -> list[int]:
-    """Byte offsets of the ``    -1`` lines that open and close data sets (pyuff's rule:
-    the token followed by a line end, the end of the file, or blanks to column 80)."""
-    found, at = [], data.find(b"    -1")
-    while at != -1:
-        after = data[at + 6:at + 80]
-        if not after or after[:1] in (b"\n", b"\r") or (len(after) == 74 and not after.strip()):
-            found.append(at)
-        at = data.find(b"    -1", at + 1)
-    return found
-
-
-def _check_uff_structure(src: str, data: bytes) -> list[tuple[int, int]]:
-    """(first line, type) of every data set; a data set without its closing delimiter
-    (a file cut inside it) is refused with its number, type and first line."""
-    marks = _uff_delimiters(data)
-    sets = []
-    for k in range(0, len(marks), 2):
-        line = data.count(b"\n", 0, marks[k]) + 1
-        head = data[marks[k]:marks[k] + 200].splitlines()
-        kind = head[1][:6].decode("ascii", "replace").strip() if len(head) > 1 else "?"
-        if k + 1 == len(marks):
-            raise InputError(f"{src}:{line}: data set {k // 2 + 1} (type {kind or '?'}) is cut "
-                             "off: no closing '    -1' line (truncated file?)")
-        sets.append((line, kind))
-    return sets
-
-
 def read_frf_uff(path) -> FRFSet:
     """Read the FRFs (data sets 58, function type 4) of a universal file.
 
     A file cut inside a data set, or a data set 58 holding fewer values than its record 7
     announces, is refused (``FILE:LINE: data set K ...``): a truncated file must not give
     fewer response points or lines without a word."""
-    import pyuff
-
     src = str(path)
-    if not Path(path).is_file():
-        raise InputError(f"{src}: no such file")
-    layout = _check_uff_structure(src, Path(path).read_bytes())
-    try:   # pyuff prints, and warns on non-finite values (refused below with the file)
-        with contextlib.redirect_stdout(io.StringIO()), warnings.catch_warnings(), \
-                np.errstate(all="ignore"):
-            warnings.simplefilter("ignore")
-            uff = pyuff.UFF(src)
-            types = np.asarray(uff.get_set_types())
-            idx = [int(i) for i in np.flatnonzero(types == 58)]
-            sets = uff.read_sets(idx) if idx else []
-    except Exception as exc:  # pyuff raises bare Exception
-        raise InputError(f"{src}: not a readable universal file ({exc})") from None
-    if isinstance(sets, dict):
-        sets = [sets]
-    for i, s in zip(idx, sets):
-        n = int(s.get("num_pts", -1))
-        got = np.size(s.get("data"))
-        if got != n or np.size(s.get("x")) != n:
-            line = layout[i][0] if i < len(layout) else "?"
-            raise InputError(f"{src}:{line}: data set {i + 1} (58, response point "
-                             f"{_label(s.get('rsp_node', 0), s.get('rsp_dir', 0))}) holds "
-                             f"{got} of the {n} values its record 7 announces")
+    sets = read_uff_sets(path, 58)    # whole data sets only (ident.uff_sets)
     sets = [s for s in sets if int(s.get("func_type", 0)) == 4]
     if not sets:
         raise InputError(f"{src}: no FRF (data set 58, function type 4) in the file")

@@ -6,11 +6,12 @@ waiting for minutes, and a scheduler without workers accepts tasks that never ru
 
 * a scheduler file (``*.json``, written by ``dask scheduler --scheduler-file F``) must
   exist and hold the scheduler's ``address``;
-* a ``tcp://HOST:PORT`` address must accept a TCP connection within
-  :data:`CONNECT_TIMEOUT_S` (:func:`check_scheduler`, cheap: the CLI calls it before any
-  work starts);
-* :func:`connect_client` then connects with the same limit and waits at most as long for
-  a first worker.
+* a ``tcp://HOST:PORT`` address must accept a TCP connection and send the dask
+  handshake within :data:`CONNECT_TIMEOUT_S` (:func:`check_scheduler`, cheap: the CLI
+  calls it before any work starts; a peer that accepts and stays silent would otherwise
+  keep ``distributed.Client`` waiting without end, its own timeout notwithstanding);
+* :func:`connect_client` then connects under a hard limit (a thread, 3 times that) and
+  waits at most :data:`CONNECT_TIMEOUT_S` for a first worker.
 
 Every failure is a ``ConnectionError`` (an ``OSError``) with one line naming the
 scheduler and what is wrong.
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import json
 import socket
+import threading
 from pathlib import Path
 
 __all__ = ["CONNECT_TIMEOUT_S", "check_scheduler", "connect_client", "scheduler_address"]
@@ -72,17 +74,43 @@ def check_scheduler(target: str, timeout: float = CONNECT_TIMEOUT_S) -> str:
     """
     address = scheduler_address(target)
     hp = _host_port(address)
-    if hp is not None:
-        try:
-            with socket.create_connection(hp, timeout=timeout):
-                pass
-        except socket.timeout:
-            raise ConnectionError(f"dask scheduler at {address}: no answer within "
-                                  f"{timeout:g} s") from None
-        except OSError as exc:
-            raise ConnectionError(f"dask scheduler at {address}: cannot connect "
-                                  f"({exc.strerror or exc})") from None
+    if hp is None:
+        return address
+    try:
+        with socket.create_connection(hp, timeout=timeout) as sock:
+            # a dask scheduler sends its handshake (msgpack, key "compression") as soon as
+            # it accepts; a peer that stays silent would keep distributed waiting forever
+            greeting = b"" if address.startswith("tls://") else _first_bytes(sock, timeout)
+    except socket.timeout:
+        raise ConnectionError(f"dask scheduler at {address}: no answer within "
+                              f"{timeout:g} s") from None
+    except OSError as exc:
+        raise ConnectionError(f"dask scheduler at {address}: cannot connect "
+                              f"({exc.strerror or exc})") from None
+    if not address.startswith("tls://") and b"compression" not in greeting:
+        raise ConnectionError(f"dask scheduler at {address}: the peer does not speak the "
+                              "dask protocol (no handshake)")
     return address
+
+
+def _first_bytes(sock, timeout: float, size: int = 256) -> bytes:
+    """What the peer sends first, within ``timeout`` seconds (socket.timeout if nothing)."""
+    import time
+
+    sock.settimeout(timeout)
+    data, end = b"", time.monotonic() + timeout
+    while b"compression" not in data and len(data) < size:
+        sock.settimeout(max(end - time.monotonic(), 1e-3))
+        try:
+            chunk = sock.recv(size)
+        except socket.timeout:
+            if data:
+                break
+            raise
+        if not chunk:
+            break
+        data += chunk
+    return data
 
 
 def connect_client(target: str, timeout: float = CONNECT_TIMEOUT_S):
@@ -90,11 +118,24 @@ def connect_client(target: str, timeout: float = CONNECT_TIMEOUT_S):
     from distributed import Client
 
     address = check_scheduler(target, timeout)
-    try:
-        client = Client(address, timeout=f"{timeout:g}s")
-    except Exception as exc:  # timeouts, refused, and garbage from a non-dask peer
-        raise ConnectionError(f"dask scheduler at {address}: no dask handshake "
-                              f"({exc.__class__.__name__}: {str(exc)[:120]})") from None
+    result = {}
+
+    def connect():
+        try:
+            result["client"] = Client(address, timeout=f"{timeout:g}s")
+        except Exception as exc:  # timeouts, refused, garbage from a non-dask peer
+            result["error"] = exc
+
+    # distributed's own timeout does not bound every wait of its handshake: a hard limit
+    worker = threading.Thread(target=connect, name="iwanfe-dask-connect", daemon=True)
+    worker.start()
+    worker.join(3 * timeout)
+    if "client" not in result:
+        exc = result.get("error")
+        why = (f"{exc.__class__.__name__}: {str(exc)[:120]}" if exc is not None
+               else f"no connection after {3 * timeout:g} s")
+        raise ConnectionError(f"dask scheduler at {address}: no dask handshake ({why})")
+    client = result["client"]
     try:
         client.wait_for_workers(1, timeout=timeout)
     except Exception:

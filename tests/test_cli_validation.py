@@ -173,16 +173,29 @@ def test_scheduler_checks_are_bounded_in_time(tmp_path):
     threading.Thread(target=lambda: accepted.append(server.accept()), daemon=True).start()
     port = server.getsockname()[1]
     t0 = time.perf_counter()
-    with pytest.raises(ConnectionError, match="no dask handshake"):
+    with pytest.raises(ConnectionError, match="no answer within 1 s"):
         connect_client(f"tcp://127.0.0.1:{port}", timeout=1.0)
     assert time.perf_counter() - t0 < 15
+    # one that answers with something else than dask
+    talker = socket.socket()
+    talker.bind(("127.0.0.1", 0))
+    talker.listen(4)
+
+    def greet():
+        conn, _ = talker.accept()
+        conn.sendall(b"HTTP/1.1 400 Bad Request\r\n\r\n")
+    threading.Thread(target=greet, daemon=True).start()
+    with pytest.raises(ConnectionError, match="does not speak the dask protocol"):
+        check_scheduler(f"tcp://127.0.0.1:{talker.getsockname()[1]}", timeout=1.0)
     server.close()
+    talker.close()
 
 
 def test_scheduler_without_workers_is_refused():
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None,
+                      protocol="tcp://", host="127.0.0.1") as cluster:
         t0 = time.perf_counter()
         with pytest.raises(ConnectionError, match="has no worker"):
             connect_client(cluster.scheduler_address, timeout=1.0)
