@@ -76,6 +76,9 @@ def executor_from_args(args: argparse.Namespace) -> ExecutorSpec:
     ------
     ValueError
         Contradictory or malformed options (one line, for ``cli.main``).
+    ConnectionError
+        ``--scheduler`` names a missing scheduler file or an address that does not
+        answer within :data:`runs.scheduler.CONNECT_TIMEOUT_S` seconds.
     """
     kind = getattr(args, "executor", "auto") or "auto"
     workers = getattr(args, "workers", None)
@@ -89,4 +92,10 @@ def executor_from_args(args: argparse.Namespace) -> ExecutorSpec:
     if scheduler is not None and workers is not None:
         raise ValueError("give --workers (start a local cluster) or --scheduler (use an "
                          "existing one), not both")
-    return ExecutorSpec(kind=kind, workers=workers, scheduler=scheduler)
+    try:
+        # an unreachable scheduler is refused now, in seconds, before any work
+        return ExecutorSpec(kind=kind, workers=workers, scheduler=scheduler).check()
+    except (ValueError, ConnectionError) as exc:
+        if scheduler is None:
+            raise
+        raise type(exc)(f"--scheduler {scheduler}: {exc}") from None

@@ -1,14 +1,33 @@
 """The ``iwanfe`` command: parses, calls, prints.
 
-Every sub-command lives in ``cli/commands/<name>.py``. Bad input (``ValueError``,
-including :class:`ident.errors.InputError`, or an unreadable file) is reported as one
-line on stderr with exit status 2, never as a traceback.
+Every sub-command lives in ``cli/commands/<name>.py``. The rules every command follows:
+
+Bad input
+    Every argument and input file is checked before any work starts. Bad input
+    (``ValueError``, including :class:`ident.errors.InputError`, or an unreadable file)
+    ends with one line on stderr naming the input and the reason, and exit status 2;
+    never a traceback. A failure that is not the input's fault (a solver that does not
+    converge) is one line too, with exit status 1 (``IWANFE_TRACEBACK=1`` shows where).
+Interrupts
+    Ctrl-C prints ``iwanfe: interrupted`` and exits with status 130, without traceback,
+    wherever it lands (compiled code included: :mod:`runs.interrupt` defers it to the
+    next safe point while compiled code runs); finished work already stored stays
+    stored, and a rerun resumes from it.
+Output paths
+    An output *file* (``--out FILE``, ``--plot FILE``) goes into an existing folder: no
+    folder is created for a file. An output *folder* (``--out DIR``) is created with its
+    missing parents, unless the first folder to create would sit directly in the
+    filesystem root (``/nonexistent/out`` is a typo, refused). Either way the path is
+    checked before the work starts (:mod:`cli.validate`).
+Output format
+    A readable table by default, one JSON document on stdout with ``--json``.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
 import os
+import re
 import sys
 
 # One BLAS thread unless the user says otherwise, set before numpy loads: the models
@@ -16,6 +35,8 @@ import sys
 # then gives bitwise the numbers of worker processes (which run one thread each).
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+
+from runs import interrupt  # noqa: E402  (numpy-free: installs the Ctrl-C handler)
 
 # Sub-command modules in the order --help lists them.
 COMMANDS = [
@@ -33,12 +54,37 @@ COMMANDS = [
     "update",
 ]
 
+#: A command-line word that is a number, not an option: argparse's own pattern misses
+#: exponents and the IEEE words (``--amplitude -1e-3`` read as an unknown option).
+_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.I)
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """Adds ``(default: X)`` to an option's help once: not when the help already says
+    its default, not for a None default, and not for on/off flags."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (action.default is None or action.default is argparse.SUPPRESS
+                or text is argparse.SUPPRESS or "default" in text.lower()
+                or isinstance(action, (argparse._StoreTrueAction, argparse._StoreFalseAction,
+                                       argparse._StoreConstAction))
+                or action.option_strings == []):
+            return text
+        return text + " (default: %(default)s)"
+
 
 class _Parser(argparse.ArgumentParser):
-    """ArgumentParser whose usage errors are one line and exit status 2."""
+    """ArgumentParser whose usage errors are one line and exit status 2, which reads
+    ``-1e-3`` as a number, and whose help prints each default once."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs["formatter_class"] = _HelpFormatter
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NUMBER
 
     def error(self, message: str) -> None:  # noqa: D401 - argparse API
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        self.exit(2, f"{self.prog}: error: {message}".splitlines()[0] + "\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -62,21 +108,70 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def _interrupted() -> int:
+    print("iwanfe: interrupted", file=sys.stderr)
+    return 130
+
+
+def _one_line(prefix: str, exc: BaseException) -> str:
+    msg = str(exc) or exc.__class__.__name__
+    lines = [s for s in f"{prefix}{msg}".splitlines() if s.strip()]
+    return lines[0] if lines else prefix + exc.__class__.__name__
+
+
+def _run(argv) -> int:
+    """Parse ``argv`` and run the chosen command."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
         return 0
+    return int(args.func(args) or 0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one command; returns the exit status (0, 1, 2 or 130, see module docstring).
+
+    Called without ``argv`` (the installed ``iwanfe`` script), Ctrl-C stays recorded but
+    harmless after the command returned, while the interpreter exits; called with
+    ``argv`` (tests, scripts) the previous SIGINT handler is restored."""
+    return run_guarded(lambda: _run(argv), restore=argv is not None)
+
+
+def run_guarded(call, restore: bool = True) -> int:
+    """``call()`` under the command line's rules for errors and Ctrl-C (module
+    docstring); its return value (an int or None) is the exit status."""
+    interrupt.install()
     try:
-        return int(args.func(args) or 0)
-    except (ValueError, OSError) as exc:
-        msg = str(exc) or exc.__class__.__name__
-        print(f"iwanfe: error: {msg}".splitlines()[0], file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("iwanfe: interrupted", file=sys.stderr)
-        return 130
+        try:
+            code = int(call() or 0)
+        except SystemExit as exc:  # argparse: --help (0) or a usage error (2)
+            if interrupt.requested() and exc.code not in (0, None):
+                return _interrupted()
+            raise
+        except KeyboardInterrupt:
+            return _interrupted()
+        except (ValueError, OSError) as exc:
+            if interrupt.requested() or interrupt.caused_by_interrupt(exc):
+                return _interrupted()
+            print(_one_line("iwanfe: error: ", exc), file=sys.stderr)
+            return 2
+        except Exception as exc:  # not the input's fault: one line, exit 1
+            if interrupt.requested() or interrupt.caused_by_interrupt(exc):
+                return _interrupted()
+            if os.environ.get("IWANFE_TRACEBACK"):
+                raise
+            print(_one_line(f"iwanfe: failed: {exc.__class__.__name__}: ", exc)
+                  + " (IWANFE_TRACEBACK=1 shows where)", file=sys.stderr)
+            return 1
+        if interrupt.requested():  # a Ctrl-C that some library swallowed
+            return _interrupted()
+        return code
+    finally:
+        if restore:
+            interrupt.uninstall()
+        else:
+            interrupt.quiet()
 
 
 if __name__ == "__main__":

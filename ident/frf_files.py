@@ -46,10 +46,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ident.errors import InputError
+from ident.errors import InputError, text_file
 from ident.frf_header import (CONTROLS, HEADER_KEYS, header_values, id_line_values,
                               parse_control, parse_excitation, parse_run_order)
 from ident.poles import QUANTITIES
+from ident.uff_sets import read_uff_sets
 
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
 _UFF_ORDINATE_CODE = {v: k for k, v in _UFF_ORDINATE.items()}
@@ -123,7 +124,7 @@ def read_frf_csv(path) -> FRFSet:
     meta: dict[str, tuple[int, str]] = {}
     header = None
     rows = []
-    with open(path, encoding="utf-8-sig") as fh:
+    with text_file(path, src) as fh:
         for lineno, text in enumerate(fh, start=1):
             s = text.strip()
             if not s:
@@ -257,22 +258,13 @@ def _node_dir(label: str, default_node: int) -> tuple[int, int]:
 
 
 def read_frf_uff(path) -> FRFSet:
-    """Read the FRFs (data sets 58, function type 4) of a universal file."""
-    import pyuff
+    """Read the FRFs (data sets 58, function type 4) of a universal file.
 
+    A file cut inside a data set, or a data set 58 holding fewer values than its record 7
+    announces, is refused (``FILE:LINE: data set K ...``): a truncated file must not give
+    fewer response points or lines without a word."""
     src = str(path)
-    if not Path(path).is_file():
-        raise InputError(f"{src}: no such file")
-    try:
-        with contextlib.redirect_stdout(io.StringIO()):
-            uff = pyuff.UFF(src)
-            types = np.asarray(uff.get_set_types())
-            idx = [int(i) for i in np.flatnonzero(types == 58)]
-            sets = uff.read_sets(idx) if idx else []
-    except Exception as exc:  # pyuff raises bare Exception
-        raise InputError(f"{src}: not a readable universal file ({exc})") from None
-    if isinstance(sets, dict):
-        sets = [sets]
+    sets = read_uff_sets(path, 58)    # whole data sets only (ident.uff_sets)
     sets = [s for s in sets if int(s.get("func_type", 0)) == 4]
     if not sets:
         raise InputError(f"{src}: no FRF (data set 58, function type 4) in the file")
@@ -293,6 +285,8 @@ def read_frf_uff(path) -> FRFSet:
     keys = id_line_values(sets[0], src)
     if np.any(np.diff(x) <= 0):
         raise InputError(f"{src}: frequencies must be strictly increasing")
+    if x.size < 2 or not x[0] > 0:
+        raise InputError(f"{src}: needs at least 2 frequencies, all > 0 Hz")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(frf))):
         raise InputError(f"{src}: non-finite frequency or FRF value")
     reference = keys.get("reference") or _label(*refs.pop())

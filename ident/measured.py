@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ident.errors import InputError
+from ident.errors import InputError, text_file
 from ident.modal_data import MeasuredData, annotation_warnings
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
@@ -69,16 +69,30 @@ def _parse_int(text: str, source: str, line: int, column: str) -> int:
     value = _parse_float(text, source, line, column)
     if value != round(value):
         _fail(source, line, column, f"must be an integer, got {text!r}")
+    if abs(value) > 2.0 ** 53:  # beyond that a float holds no exact integer (nor does C long)
+        _fail(source, line, column, f"integer out of range (|value| <= 2^53), got {text!r}")
     return int(round(value))
+
+
+def _csv_rows(reader, source: str):
+    """The reader's rows; its own errors (a field over the size limit, a bad quote)
+    become one-line input errors."""
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            _fail(source, reader.line_num, "1", f"not a CSV line ({exc})")
 
 
 def _read_rows(path: Path, source: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header names and (line number, fields) of the non-blank data rows."""
-    with open(path, newline="", encoding="utf-8-sig") as fh:
+    with text_file(path, source, newline="") as fh:
         reader = csv.reader(fh)
         header: list[str] | None = None
         rows: list[tuple[int, list[str]]] = []
-        for fields in reader:
+        for fields in _csv_rows(reader, source):
             lineno = reader.line_num
             if not any(f.strip() for f in fields):
                 continue
@@ -217,9 +231,11 @@ def read_measured(path) -> MeasuredData:
             _fail(source, lines[j], name,
                   f"mode {m}: {name} of level {level[j]} ({e[bad[0] + 1]:g}) does not "
                   f"exceed that of level {level[i]} ({e[bad[0]]:g})")
-        ratio = e[1:] / e[:-1]
-        median = np.median(ratio)
-        if np.any(np.abs(ratio / median - 1.0) > RATIO_TOLERANCE):
+        with np.errstate(over="ignore", invalid="ignore"):   # extreme but valid values
+            ratio = e[1:] / e[:-1]
+            median = np.median(ratio)
+            uneven = np.any(np.abs(ratio / median - 1.0) > RATIO_TOLERANCE)
+        if uneven:
             warnings.append(
                 f"{source}: mode {m}: {name} ratios between successive levels are not "
                 f"constant ({ratio.min():.3g} to {ratio.max():.3g}, median {median:.3g})")

@@ -60,6 +60,8 @@ def parse_levels(text: str) -> list[int]:
         b = int(m.group(2)) if m.group(2) else a
         if b < a:
             raise InputError(f"--fit-levels: range {item!r} runs backwards")
+        if b > 10_000:   # a stepped-sine test has tens of levels; this bounds the list
+            raise InputError(f"--fit-levels: level {b} in {item!r} exceeds 10000")
         out.extend(range(a, b + 1))
     if len(set(out)) != len(out):
         raise InputError(f"--fit-levels: {text!r} repeats a level")

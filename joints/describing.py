@@ -77,7 +77,9 @@ def describing_function(p: IwanParameters, amplitude):
     inc_beta = special.betainc(a, b, rho) * special.beta(a, b)
     k_in = (p.K_T * _slider_in_phase(rho)
             - 8.0 * R * A ** (chi + 1.0) * inc_beta / (np.pi * (chi + 1.0)))
-    k_quad = dissipation_per_cycle(p, A) / (np.pi * A * A)
+    D = dissipation_per_cycle(p, A)
+    with np.errstate(over="ignore"):  # A*A overflows above 1.3e154 m: divide twice there
+        k_quad = np.where(A < 1e150, D / (np.pi * A * A), D / (np.pi * A) / A)
     if k_in.ndim == 0:
         return float(k_in), float(k_quad)
     return k_in, k_quad

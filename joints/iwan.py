@@ -96,6 +96,33 @@ class IwanParameters:
             raise ValueError(f"F_S must be > 0, got {self.F_S:g}")
         if self.beta < 0.0:
             raise ValueError(f"beta must be >= 0, got {self.beta:g}")
+        self._check_representable()
+
+    def _check_representable(self) -> None:
+        """phi_max and R must be positive normal doubles and S finite.
+
+        Each input may be a fine number while a derived one is not: ``K_T = 1e300`` N/m
+        with ``F_S = 400`` N gives ``phi_max ~ 4e-297`` m, whose power ``chi+2`` underflows
+        and ``R = F_S (chi+1)/(phi_max^(chi+2) ...)`` would be ~1e446 N/m^1.5, beyond
+        double precision. Such a joint cannot be computed with, so it is refused here,
+        with the numbers, instead of failing later as a division by zero or an infinity.
+        """
+        tiny = np.finfo(float).tiny
+        try:
+            phi_max = self.phi_max
+            R = self.R if phi_max >= tiny else math.nan
+            S = self.S if phi_max >= tiny else math.nan
+        except (ZeroDivisionError, OverflowError):
+            phi_max, R, S = self.phi_max, math.nan, math.nan
+        where = (f"chi = {self.chi:g}, K_T = {self.K_T:g} N/m, F_S = {self.F_S:g} N, "
+                 f"beta = {self.beta:g}")
+        if not (math.isfinite(phi_max) and phi_max >= tiny):
+            raise ValueError(f"{where} give phi_max = F_S (1+beta)/(K_T (beta + (chi+1)/"
+                             f"(chi+2))) = {phi_max:g} m, outside double precision")
+        if not (math.isfinite(R) and R >= tiny and math.isfinite(S)):
+            raise ValueError(f"{where} give phi_max = {phi_max:g} m and a density R = F_S "
+                             f"(chi+1)/(phi_max^(chi+2) (beta + (chi+1)/(chi+2))) outside "
+                             f"double precision (paper eq. 42)")
 
     @property
     def _c(self) -> float:
@@ -134,13 +161,19 @@ class IwanParameters:
             raise ValueError(f"phi_max must be > 0, got {phi_max:g}")
         if S < 0.0:
             raise ValueError(f"S must be >= 0, got {S:g}")
-        continuous = R * phi_max ** (chi + 1.0) / (chi + 1.0)
-        return cls(
-            chi=chi,
-            K_T=continuous + S,
-            F_S=R * phi_max ** (chi + 2.0) / (chi + 2.0) + S * phi_max,
-            beta=S / continuous,
-        )
+        tiny = np.finfo(float).tiny
+        try:
+            continuous = R * phi_max ** (chi + 1.0) / (chi + 1.0)
+            F_S = R * phi_max ** (chi + 2.0) / (chi + 2.0) + S * phi_max
+            beta = S / continuous
+        except (OverflowError, ZeroDivisionError):
+            continuous = F_S = beta = math.nan
+        if not all(math.isfinite(v) and v >= tiny for v in (continuous, F_S)) \
+                or not math.isfinite(beta):
+            raise ValueError(f"R = {R:g}, chi = {chi:g}, phi_max = {phi_max:g} m, S = {S:g} N/m "
+                             f"give K_T or F_S = R phi_max^(chi+2)/(chi+2) + S phi_max outside "
+                             f"double precision")
+        return cls(chi=chi, K_T=continuous + S, F_S=F_S, beta=beta)
 
 
 # --------------------------------------------------------------------------- density

@@ -44,11 +44,13 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
+from runs import interrupt
+from runs.scheduler import check_scheduler, connect_client
+
 __all__ = ["EXECUTORS", "ExecutorSpec", "run_sweep", "task_seeds"]
 
 EXECUTORS = ("serial", "processes", "dask")
 _ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-CONNECT_TIMEOUT = "20s"  # to reach an existing scheduler
 _NO_SHARED = object()
 _WORKER_SHARED = None  # the shared object inside a process-pool worker
 
@@ -104,6 +106,13 @@ class ExecutorSpec:
     def n_workers(self) -> int:
         """Workers of a pool or local cluster this spec starts (CPU cores by default)."""
         return self.workers or os.cpu_count() or 1
+
+    def check(self) -> "ExecutorSpec":
+        """Check an existing scheduler now (seconds at most, ``ConnectionError``
+        otherwise; :func:`runs.scheduler.check_scheduler`), before any work starts."""
+        if isinstance(self.scheduler, str):
+            check_scheduler(self.scheduler)
+        return self
 
     def describe(self) -> str:
         """One line for logs and reports."""
@@ -188,15 +197,19 @@ def run_sweep(func: Callable, tasks: Iterable, executor: str | ExecutorSpec = "s
     try:
         if spec.kind == "serial":
             for i, task in enumerate(tasks):
-                finish(i, func(task) if shared is _NO_SHARED else func(task, shared))
+                # Ctrl-C waits for the task (which checks at its own safe points) and
+                # its storage; see runs.interrupt
+                with interrupt.deferred():
+                    finish(i, func(task) if shared is _NO_SHARED else func(task, shared))
                 bar.update(1)
         else:
             chunks = [(start, tasks[start:start + size]) for start in range(0, len(tasks), size)]
             runner = _run_processes if spec.kind == "processes" else _run_dask
             with closing(runner(func, chunks, spec, shared)) as finished:
                 for start, values in finished:
-                    for offset, value in enumerate(values):
-                        finish(start + offset, value)
+                    with interrupt.deferred():     # a result is stored whole
+                        for offset, value in enumerate(values):
+                            finish(start + offset, value)
                     bar.update(len(values))
     finally:
         bar.close()
@@ -262,15 +275,27 @@ def _run_processes(func, chunks, spec, shared):
                                mp_context=multiprocessing.get_context("spawn"),
                                initializer=_init_pool_worker, initargs=(payload,))
     try:
-        with _environment(_ONE_THREAD):  # workers start during the submissions
+        # workers start during the submissions: one BLAS thread, and SIGINT blocked (the
+        # terminal's Ctrl-C reaches the whole process group; this process stops them)
+        with _environment(_ONE_THREAD), interrupt.sigint_blocked():
             futures = {pool.submit(_call_chunk_pool, func, part, use_shared): start
                        for start, part in chunks}
         for fut in as_completed(futures):
             yield futures[fut], fut.result()
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
+        _stop_pool(pool)
         raise
     pool.shutdown()
+
+
+def _stop_pool(pool) -> None:
+    """Cancel what has not started and end the running workers now (an interrupt or an
+    error: their results would be thrown away, and waiting could take minutes)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
 
 
 def _connect(spec):
@@ -281,28 +306,36 @@ def _connect(spec):
         raise ValueError("the dask executor needs the 'distributed' package") from None
     if isinstance(spec.scheduler, Client):
         return spec.scheduler, None, False
-    if spec.scheduler is not None:
-        target = spec.scheduler
-        try:
-            if target.endswith(".json"):
-                client = Client(scheduler_file=target, timeout=CONNECT_TIMEOUT)
-            else:
-                client = Client(target, timeout=CONNECT_TIMEOUT)
-        except (OSError, TimeoutError) as exc:
-            raise ConnectionError(f"cannot reach the dask scheduler at {target} ({exc})") from None
-        return client, None, True
+    if spec.scheduler is not None:   # checked, with time limits (runs.scheduler)
+        return connect_client(spec.scheduler), None, True
     with warnings.catch_warnings():  # "Port 8787 is already in use": another port is used
         warnings.filterwarnings("ignore", message="Port .* is already in use")
         # on the loopback interface, any free port, no dashboard: nothing to resolve or
         # to collide with (the workers are this machine's processes)
-        cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1,
-                               processes=True, host="127.0.0.1", dashboard_address=None)
+        with interrupt.sigint_blocked():   # its processes never see the terminal's Ctrl-C
+            cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1,
+                                   processes=True, host="127.0.0.1", dashboard_address=None)
     try:
         client = Client(cluster)
     except BaseException:
         cluster.close()
         raise
     return client, cluster, True
+
+
+def _quiet_logs() -> None:
+    import logging
+
+    for name in ("distributed", "asyncio", "tornado"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+def _local_worker_setup() -> None:
+    """In a worker of a local cluster: the terminal's Ctrl-C is for the parent, which
+    stops the cluster (and reports every task's error itself), so no own handler and no
+    closing chatter on stderr."""
+    interrupt.ignore_sigint()
+    _quiet_logs()
 
 
 def _run_dask(func, chunks, spec, shared):
@@ -312,6 +345,8 @@ def _run_dask(func, chunks, spec, shared):
     client, cluster, close = _connect(spec)
     futures = []
     try:
+        if cluster is not None:   # our own workers: Ctrl-C and errors are reported here
+            client.run(_local_worker_setup)
         extra = ()
         if shared is not _NO_SHARED:
             extra = (client.scatter(shared, broadcast=True, hash=False),)
@@ -320,10 +355,16 @@ def _run_dask(func, chunks, spec, shared):
         start_of = {fut.key: start for fut, (start, _) in zip(futures, chunks)}
         for fut in as_completed(futures):
             yield start_of[fut.key], fut.result()
+    except BaseException:
+        # an interrupt or error: the cluster's closing chatter (workers killed, scattered
+        # data lost, pending messages) is expected, not news
+        _quiet_logs()
+        raise
     finally:
-        for fut in futures:
-            if not fut.done():
-                fut.cancel()
+        if cluster is None:   # a remote cluster keeps running: cancel what is left
+            for fut in futures:
+                if not fut.done():
+                    fut.cancel()
         if close:
             client.close()
         if cluster is not None:

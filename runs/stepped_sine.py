@@ -29,6 +29,7 @@ from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.newton_path import SteadyStateError
 from fe.reduction import JointBank, ReducedModel
 from runs.campaign import Campaign, CampaignResult, LevelResult, NewmarkProtocol, PaperProtocol
+from runs import interrupt
 from runs.executor import ExecutorSpec, run_sweep
 from runs.store import open_manifest, write_manifest
 
@@ -200,7 +201,8 @@ def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: i
     # a protocol defined elsewhere brings its own runner (runs.response_control)
     runner = getattr(campaign.protocol, "run_level", None) or _LEVEL_RUNNERS[campaign.protocol.name]
     try:
-        rec, slip, amp, work = runner(model, bank, campaign, F, tick)
+        with interrupt.deferred():   # Ctrl-C between lines only, never inside compiled code
+            rec, slip, amp, work = runner(model, bank, campaign, F, interrupt.Ticker(tick))
     except SteadyStateError as exc:
         raise exc.within(f"level {level + 1} of {campaign.force.size} (F = {F:.4g} N)") from None
     return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)

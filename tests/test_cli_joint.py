@@ -91,8 +91,8 @@ def test_table_and_plot(tmp_path):
     (["--chi", CHI, "--kt", KT, "--fs", 0, "--beta", BETA], "F_S must be > 0"),
     (["--chi", CHI, "--kt", "abc", "--fs", FS, "--beta", BETA], "--kt: invalid float value: 'abc'"),
     (["--chi", CHI, "--kt", KT, "--fs", FS, "--beta", BETA, "--amplitude", 1e-3, -2e-3],
-     "amplitude must be finite and > 0, got -0.002"),
-    (["--chi", "nan", "--kt", KT, "--fs", FS, "--beta", BETA], "--chi must be finite"),
+     "--amplitude -0.002: must be a finite number > 0"),
+    (["--chi", "nan", "--kt", KT, "--fs", FS, "--beta", BETA], "--chi nan: must be a finite number"),
 ])
 def test_bad_input_one_line_exit_2(args, text):
     out = iwanfe(*args)

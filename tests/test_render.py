@@ -227,7 +227,7 @@ def test_cli_render_rejects_bad_input(capsys):
     from cli.main import main
 
     assert main(["render", "--case", "double-beam", "--mode", "0", "--out", "a.png"]) == 2
-    assert "--mode must be >= 1" in capsys.readouterr().err
+    assert "--mode 0: must be in 1..39" in capsys.readouterr().err
     assert main(["render", "--mode", "1", "--out", "a.svg"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and ".png" in err

@@ -324,7 +324,7 @@ def test_cli_help(capsys):
 @pytest.mark.parametrize("argv, message", [
     (["--samples", "0"], "must be >= 1"),
     (["--seed", "x"], "whole number"),
-    (["--confidence", "1.5"], "confidence must lie in (0, 1)"),
+    (["--confidence", "1.5"], "--confidence 1.5: must lie in (0, 1)"),
     (["--fit-levels", "1-12"], "exceed"),
     (["no_such_file.csv"], "no such file"),
     (["--executor", "serial", "--workers", "2"], "takes neither"),

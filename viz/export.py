@@ -7,11 +7,11 @@ mode ``k`` (1-based) becomes the point-data 3-vector ``mode_k`` = displacement
 ``(u_x, 0, u_z)`` in m (mode-shape units); in "lines" geometry ``rotation_k`` holds the
 rotation ``theta = dw/dx`` (rad) as well. Cell data ``strip`` numbers the strips from 0.
 
-Frequencies: meshio 5.3 writes no field data to either format, so they are added here:
-into the .vtu as a VTK ``<FieldData>`` array ``frequency_hz`` (ParaView shows it under
-Field Data; meshio reads it back), and for .xdmf into the companion .h5 file as the
-dataset ``/frequency_hz`` (and root attribute), which XDMF has no place to reference.
-:func:`read_modes` returns both back.
+Frequencies: every mode ``k`` comes with the point-data scalar ``frequency_hz_k`` (Hz,
+the same at every point), in both formats, so any XDMF or VTU reader, ``meshio.read``
+included, finds mode and frequency side by side (meshio writes and reads no XDMF field
+data). The .vtu also holds them as a VTK ``<FieldData>`` array ``frequency_hz`` (ParaView
+shows it under Field Data). :func:`read_modes` returns them.
 """
 from __future__ import annotations
 
@@ -57,7 +57,8 @@ def _slab_block(strip, disp):
     return points, cells, vec, None
 
 
-def mode_mesh(strips: Sequence, modes: Sequence[Sequence[Mapping]], geometry: str = "lines"):
+def mode_mesh(strips: Sequence, modes: Sequence[Sequence[Mapping]], geometry: str = "lines",
+              frequencies_hz=None):
     """Build a :class:`meshio.Mesh` of the strips with every mode as point data.
 
     Parameters
@@ -70,12 +71,14 @@ def mode_mesh(strips: Sequence, modes: Sequence[Sequence[Mapping]], geometry: st
     geometry : {"lines", "slabs"}
         Centroid lines (exact FE data) or hexahedral slabs (fibre displacements
         ``u - zeta theta``, Euler-Bernoulli).
+    frequencies_hz : array_like, shape (n_modes,), optional
+        Natural frequencies (Hz): point data ``frequency_hz_k`` (constant).
 
     Returns
     -------
     meshio.Mesh
-        Point data ``mode_1..mode_K`` (n_points, 3), ``rotation_k`` for lines; cell data
-        ``strip``.
+        Point data ``mode_1..mode_K`` (n_points, 3), ``rotation_k`` for lines,
+        ``frequency_hz_k`` if given; cell data ``strip``.
     """
     import meshio
 
@@ -103,10 +106,13 @@ def mode_mesh(strips: Sequence, modes: Sequence[Sequence[Mapping]], geometry: st
         offset += len(p)
     cell_type = "line" if geometry == "lines" else "hexahedron"
     point_data = {}
+    n_points = sum(len(p) for p in points)
     for k in range(len(modes)):
         point_data[f"mode_{k + 1}"] = np.concatenate(vecs[k])
         if geometry == "lines":
             point_data[f"rotation_{k + 1}"] = np.concatenate(rots[k])
+        if frequencies_hz is not None:
+            point_data[f"frequency_hz_{k + 1}"] = np.full(n_points, float(frequencies_hz[k]))
     return meshio.Mesh(
         np.concatenate(points), [(cell_type, np.concatenate(cells))],
         point_data=point_data, cell_data={"strip": [np.concatenate(strip_id)]},
@@ -140,7 +146,8 @@ def write_modes(path, strips: Sequence, modes: Sequence[Sequence[Mapping]],
     strips, modes, geometry
         As in :func:`mode_mesh`.
     frequencies_hz : array_like, shape (n_modes,), optional
-        Natural frequencies, Hz, stored as field data ``frequency_hz``.
+        Natural frequencies, Hz: point data ``frequency_hz_k`` (and .vtu field data
+        ``frequency_hz``).
 
     Returns
     -------
@@ -161,26 +168,21 @@ def write_modes(path, strips: Sequence, modes: Sequence[Sequence[Mapping]],
         freqs = np.asarray(frequencies_hz, dtype=float).ravel()
         if freqs.size != len(modes):
             raise ValueError(f"{freqs.size} frequencies for {len(modes)} modes")
-    mesh = mode_mesh(strips, modes, geometry)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = mode_mesh(strips, modes, geometry, freqs)
+    if not path.parent.is_dir():
+        raise ValueError(f"{path}: folder {path.parent} does not exist")
     if suffix == ".vtu":
         meshio.write(path, mesh, file_format="vtu")
         if freqs is not None:
             _add_vtu_field_data(path, {"frequency_hz": freqs})
         return [path]
-    import h5py
-
     meshio.write(path, mesh, file_format="xdmf")
-    h5 = path.with_suffix(".h5")
-    if freqs is not None:
-        with h5py.File(h5, "a") as f:
-            f.create_dataset("frequency_hz", data=freqs)
-            f.attrs["frequency_hz"] = freqs
-    return [path, h5]
+    return [path, path.with_suffix(".h5")]
 
 
 def read_modes(path):
-    """Read a file written by :func:`write_modes`.
+    """Read a file written by :func:`write_modes` (``meshio.read`` and the point data
+    ``frequency_hz_k``).
 
     Returns
     -------
@@ -189,15 +191,11 @@ def read_modes(path):
     """
     import meshio
 
-    path = Path(path)
-    mesh = meshio.read(path)
-    freqs = mesh.field_data.get("frequency_hz")
-    if freqs is None and path.suffix.lower() == ".xdmf":
-        import h5py
-
-        h5 = path.with_suffix(".h5")
-        if h5.is_file():
-            with h5py.File(h5, "r") as f:
-                if "frequency_hz" in f:
-                    freqs = f["frequency_hz"][()]
+    mesh = meshio.read(Path(path))
+    n = sum(1 for name in mesh.point_data if name.startswith("mode_"))
+    names = [f"frequency_hz_{k}" for k in range(1, n + 1)]
+    if n and all(name in mesh.point_data for name in names):
+        freqs = [float(np.asarray(mesh.point_data[name]).ravel()[0]) for name in names]
+    else:
+        freqs = mesh.field_data.get("frequency_hz")
     return mesh, None if freqs is None else np.asarray(freqs, dtype=float)

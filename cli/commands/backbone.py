@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from cli import validate
+
 from cases.registry import NONLINEAR_CASES, nonlinear_case
 from runs.jsonio import print_json
 
@@ -63,8 +65,10 @@ def run(args) -> int:
     lo, hi = args.range
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
         raise ValueError(f"--range must satisfy 0 < LO < HI, got {lo} {hi}")
-    if args.points < 2:
-        raise ValueError(f"--points must be >= 2, got {args.points}")
+    if not 2 <= args.points <= 10_000:   # continuation steps: 10,000 resolve any backbone
+        raise ValueError(f"--points must be in 2..10000, got {args.points}")
+    if args.plot:
+        validate.output_file(args.plot, "--plot", (".png",))   # cli.validate: one rule
     if args.mode is not None and args.mode < 1:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
     case = nonlinear_case(args.case, mode=args.mode)

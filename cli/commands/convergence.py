@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cli import validate
 from cli.executor_options import add_executor_arguments, executor_from_args
 from runs.jsonio import print_json, to_jsonable
 
@@ -65,6 +66,8 @@ def format_table(report: dict) -> str:
 def run(args) -> int:
     from cases.convergence import convergence_report, joint_spacing
 
+    if args.out:
+        validate.output_dir(args.out, "--out")
     executor = executor_from_args(args)
     report = convergence_report(executor=executor)  # ~1 s serial: no progress bar
     table = format_table(report)

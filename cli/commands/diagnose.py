@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cli import validate
 from cases.registry import CASES, MEASURED_DATA, fe_check
 from cli.series_options import add_series_arguments, series_from_args
 from inverse.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
@@ -227,6 +228,8 @@ in units of the noise level (grey band: +/- 2).
 
 
 def run(args) -> int:
+    if args.out:
+        validate.output_dir(args.out, "--out")   # cli.validate: one output-path rule
     args.file = " ".join(args.files) or None
     data, truth = load(args.file, args.case, args)
     source = args.file or args.case

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from cli import validate
 from cases.registry import CASES, build_case
 from cli.series_options import add_series_arguments, series_from_args
 from inverse.estimate import (
@@ -74,6 +75,8 @@ def register(subparsers) -> None:
 def run(args) -> int:
     if not math.isfinite(args.force_scale) or args.force_scale <= 0:
         raise ValueError(f"--force-scale must be a positive number, got {args.force_scale}")
+    if args.plot:
+        validate.output_file(args.plot, "--plot", (".png",))   # cli.validate: one rule
     data = series_from_args(args)
     model = None if args.case is None else build_case(args.case)
     est = estimate(data, fit_levels=args.fit_levels, method=args.method, mode=args.mode,

@@ -8,11 +8,11 @@ paper's kappa2 would give (micro-slip only).
 from __future__ import annotations
 
 import argparse
-import math
 
 import numpy as np
 
 from cases.iwan_joint import joint_summary
+from cli import validate
 from joints.iwan import IwanParameters, backbone, steady_loop
 from runs.jsonio import print_json
 
@@ -93,17 +93,32 @@ def _plot(p: IwanParameters, amplitudes, path: str) -> None:
                     path=path)
 
 
-def run(args) -> int:
-    for name, value in (("chi", args.chi), ("kt", args.kt), ("fs", args.fs),
-                        ("beta", args.beta)):
-        if not math.isfinite(value):
-            raise ValueError(f"--{name} must be finite, got {value}")
-    p = IwanParameters(chi=args.chi, K_T=args.kt, F_S=args.fs, beta=args.beta)
+def _joint(args):
+    """The joint and its amplitudes, every value checked (exit 2 with one line)."""
+    for name, value in (("--chi", args.chi), ("--kt", args.kt), ("--fs", args.fs),
+                        ("--beta", args.beta)):
+        validate.finite(value, name)
+    try:
+        p = IwanParameters(chi=args.chi, K_T=args.kt, F_S=args.fs, beta=args.beta)
+    except ValueError as exc:   # names chi, K_T, F_S, beta with their values
+        raise ValueError(f"--chi/--kt/--fs/--beta: {exc}") from None
     if args.amplitude:
+        for a in args.amplitude:
+            validate.positive(a, "--amplitude")
         amplitudes = np.asarray(args.amplitude, dtype=float)
     else:
         amplitudes = np.asarray(DEFAULT_FRACTIONS) * p.phi_max
-    summary = joint_summary(p, amplitudes)
+    if args.plot:
+        validate.output_file(args.plot, "--plot", (".png",))
+    try:
+        summary = joint_summary(p, amplitudes)
+    except ValueError as exc:
+        raise ValueError(f"--amplitude: {exc}") from None
+    return p, amplitudes, summary
+
+
+def run(args) -> int:
+    p, amplitudes, summary = _joint(args)
     if args.plot:
         _plot(p, amplitudes, args.plot)
     if args.json:

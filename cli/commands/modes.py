@@ -18,7 +18,7 @@ def register(subparsers) -> None:
             "Natural frequencies of the case's linear model (joints stuck) in a band, with "
             "the mode kind, the glue-slip participation (fraction of the mode's strain "
             "energy in the glue's tangential springs = d ln(omega^2)/d ln K_T) and which "
-            "mode matches the measured 252.0 Hz (within 0.5 %%)."
+            "mode matches the measured 252.0 Hz (within 0.5 %)."
         ),
     )
     p.add_argument("--case", default="double-beam", help=f"case name ({', '.join(CASES)})")

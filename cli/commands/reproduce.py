@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cli import validate
 from cli.executor_options import add_executor_arguments, executor_from_args
 from runs.jsonio import print_json
 
@@ -168,10 +169,10 @@ def _run_lumped(args) -> int:
         if getattr(args, name, None) is not None:
             raise ValueError(f"--{name.replace('_joint', '').replace('_', '-')} applies to the "
                              f"double-beam target only")
-    if args.n_sliders < 2:
-        raise ValueError(f"--n-sliders must be >= 2, got {args.n_sliders}")
+    if not 2 <= args.n_sliders <= validate.MAX_SLIDERS:
+        raise ValueError(f"--n-sliders {args.n_sliders}: must be in 2..{validate.MAX_SLIDERS}")
     executor = executor_from_args(args)
-    out = Path(args.out or "results/lumped")
+    out = validate.output_dir(args.out or "results/lumped", "--out")
     out.mkdir(parents=True, exist_ok=True)
     study = LumpedStudy(n_sliders=args.n_sliders, bands_only=args.bands_only)
     rep = run_study(study, protocol=args.protocol, store=out, progress=not args.no_progress,
@@ -301,14 +302,15 @@ def _double_beam_text(rep, files, wall) -> str:
 
 def _run_double_beam(args) -> int:
     from cases.double_beam.files import write_report
-    from cases.double_beam.study import run_study
-
+    from cases.double_beam.settings import measured_levels
     from cases.double_beam.calibration import calibrated_model
+    from cases.double_beam.study import run_study
     t0 = time.perf_counter()
     study = _double_beam_study(args)
     glue_kt = getattr(args, "glue_kt", None)
+    validate.stepped_sine(study, measured_levels(study))   # before the campaign
     executor = executor_from_args(args)
-    out = Path(args.out or "results/double-beam")
+    out = validate.output_dir(args.out or "results/double-beam", "--out")
     progress = not args.no_progress
     model, calibration = calibrated_model(glue_kt)
     out.mkdir(parents=True, exist_ok=True)

@@ -16,6 +16,7 @@ import sys
 import time
 from pathlib import Path
 
+from cli import validate
 from cli.executor_options import add_executor_arguments, executor_from_args, int_at_least
 from runs.jsonio import print_json
 
@@ -57,7 +58,7 @@ def register(subparsers) -> None:
                         help="levels of the chi fit; the others are predicted")
     parser.add_argument("--confidence", type=float, default=DEFAULT_CONFIDENCE,
                         help="central interval of the samples and level of the "
-                             "delta-method interval (0.9: 5-95 %%)")
+                             "delta-method interval, in (0, 1) (0.9: 5-95 %%)")
     parser.add_argument("--distribution", choices=DISTRIBUTIONS, default="t",
                         help="t: Student t with the fit's degrees of freedom (matches the "
                              "estimator's t-intervals); normal: same covariance")
@@ -83,30 +84,34 @@ def register(subparsers) -> None:
 def _settings(args):
     import dataclasses
 
+    from cases.double_beam.settings import measured_levels
     from cases.double_beam.uncertainty import SAMPLE_STUDY, UncertaintySettings
 
     kw = {}
     if args.file is not None:
-        if not Path(args.file).is_file():
-            raise ValueError(f"no such file: {args.file}")
-        kw["data_path"] = str(args.file)
+        kw["data_path"] = str(validate.input_file(args.file))
     kw["fit_levels"] = args.fit_levels
     for name, key in (("force_scale", "force_scale"), ("df", "df_hz"),
                       ("sliders_per_octave", "sliders_per_octave")):
         v = getattr(args, name)
         if v is not None:
-            if isinstance(v, float) and not math.isfinite(v):
-                raise ValueError(f"--{name.replace('_', '-')} must be finite, got {v}")
+            if isinstance(v, float):
+                validate.positive(v, f"--{name.replace('_', '-')}")
             kw[key] = v
     if args.band is not None:
-        if not all(math.isfinite(b) for b in args.band):
-            raise ValueError(f"--band must be finite, got {args.band}")
-        kw["band_hz"] = tuple(args.band)
-    if not math.isfinite(args.confidence):
-        raise ValueError(f"--confidence must lie in (0, 1), got {args.confidence}")
-    study = dataclasses.replace(SAMPLE_STUDY, **kw)
-    return UncertaintySettings(study=study, n_samples=args.samples, seed=args.seed,
-                               confidence=args.confidence, distribution=args.distribution)
+        kw["band_hz"] = validate.band(args.band, lowest=1e-300)
+    if not 0 < args.confidence < 1:
+        raise ValueError(f"--confidence {args.confidence:g}: must lie in (0, 1)")
+    try:
+        study = dataclasses.replace(SAMPLE_STUDY, **kw)
+        settings = UncertaintySettings(study=study, n_samples=args.samples, seed=args.seed,
+                                       confidence=args.confidence,
+                                       distribution=args.distribution)
+    except ValueError as exc:
+        raise ValueError(f"--band/--df/--sliders-per-octave/--fit-levels: {exc}") from None
+    validate.stepped_sine(study, measured_levels(study))
+    validate.output_dir(args.out, "--out")
+    return settings
 
 
 def _f(x, spec):

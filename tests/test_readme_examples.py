@@ -1,0 +1,49 @@
+"""The README's example outputs are what the commands print (docs/examples.py).
+
+Runs every example not marked ``slow`` (``gl`` ones only where off-screen rendering
+works) in a scratch folder and compares with the README, ignoring only timings and the
+scratch folder's path. On drift: ``python docs/examples.py`` rewrites the README.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.slow
+def test_readme_examples_match_the_commands():
+    run = subprocess.run([sys.executable, str(ROOT / "docs/examples.py"), "--check", "--fast"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=1200)
+    assert run.returncode == 0, ("README examples drifted (python docs/examples.py "
+                                 "rewrites them):\n" + run.stdout[-6000:] + run.stderr[-2000:])
+    assert run.stderr.count("ran ") >= 6, run.stderr     # the examples did run
+
+
+def test_example_blocks_are_well_formed():
+    sys.path.insert(0, str(ROOT / "docs"))
+    import examples
+
+    lines = (ROOT / "README.md").read_text(encoding="utf-8").split("\n")
+    found = examples.find_examples(lines)
+    assert len(found) >= 9
+    assert all(ex.commands for ex in found)
+    # every command shown in an example block is run, none is hand-written output
+    commands = [c for ex in found for _, c in ex.commands]
+    assert any(c.startswith("iwanfe joint") for c in commands)
+    assert any(c.startswith("iwanfe uncertainty") for c in commands)
+
+
+def test_normalization_ignores_only_timings():
+    sys.path.insert(0, str(ROOT / "docs"))
+    import examples
+
+    a = ["wrote m.png: mode 4, 252.00 Hz (thickness x13.3, 1.1 s)", "time: 49.5 s total"]
+    b = ["wrote m.png: mode 4, 252.00 Hz (thickness x13.3, 5.6 s)", "time: 50 s total"]
+    assert examples.normalized(a) == examples.normalized(b)
+    c = ["wrote m.png: mode 4, 252.01 Hz (thickness x13.3, 1.1 s)", "time: 49.5 s total"]
+    assert examples.normalized(a) != examples.normalized(c)
