@@ -1,0 +1,122 @@
+"""The noise level every diagnosis model is judged against, and the test of fit.
+
+Sources, per channel (``omega2``, ``zeta``, log response):
+
+* **identification** -- the table's ``omega2_std``/``zeta_std`` (the identification's
+  own standard uncertainty of each level). The spec's choice: a noise level estimated
+  only from the residuals of the model being judged lets a misfit hide as noise.
+* **scatter** (no std column; always for the response channel, which has none) -- the
+  level-to-level roughness of the residuals of the best-fitting candidate: for each
+  interior level the residual minus its linear interpolation from the two neighbouring
+  levels (in log amplitude), ``d_v = r_v - a r_(v-1) - b r_(v+1)``, whose variance is
+  ``sigma^2 (1 + a^2 + b^2)`` for white noise of level ``sigma``, so
+  ``sigma^2 = mean(d_v^2 / (1 + a^2 + b^2))`` with ``n - 2`` degrees of freedom. A
+  misfit that varies smoothly with amplitude (a wrong power, a missing bend, a wrong
+  tie) cancels in ``d_v`` (to second order in the level spacing), so, unlike the rms
+  residual, this estimate does not grow with a smooth misfit; what it cannot tell from
+  noise is a misfit that changes sign from one level to the next (e.g. an effect that
+  follows a shuffled run order and is in no candidate). The first estimate, from the
+  raw data (an upper bound: the trend's own curvature adds to it), only weights the
+  channels for the first round of fits.
+* floors: 1e-9 of omega2 and 1e-7 of zeta (the digits a table prints); 1 % for the
+  response amplitude (log response 0.01): the resonant amplitude is read from an
+  equivalent linear fit of a nonlinear FRF, whose residue absorbs part of the FRF's
+  distortion, and from a sensor calibrated to about 1 %; a smooth departure of that
+  size says nothing about the drive.
+
+Test of fit (``unexplained``): with known noise the best fit's ``chi2`` follows a
+chi-square law with ``N - k`` degrees of freedom; with a scatter estimate of ``nu``
+degrees of freedom, ``(chi2 / (N - k))`` follows an F law ``F(N - k, nu)``. The data
+are outside their noise when the tail probability is below :data:`P_UNEXPLAINED` =
+1e-3: one series in a thousand with a correct model and correct noise levels would be
+called unexplained, and a misfit has to exceed the noise clearly (for ``N - k = 20``
+known-noise data, an rms residual 1.5x the noise).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["P_UNEXPLAINED", "Noise", "interpolation_scatter", "initial_noise",
+           "noise_from_residuals", "fit_test"]
+
+#: Tail probability below which the best fit leaves the data outside their noise.
+P_UNEXPLAINED = 1e-3
+_FLOOR = {"omega2": 1e-9, "zeta": 1e-7, "response": 1e-2}
+
+
+@dataclass
+class Noise:
+    """Noise level per channel and level (``sigma[ch]`` (n,)), its source per channel
+    (``identification`` or ``scatter``) and the degrees of freedom of a scatter
+    estimate (``dof[ch]``, inf for the identification's stds)."""
+
+    sigma: dict
+    source: dict
+    dof: dict
+
+
+def interpolation_scatter(x, r):
+    """Noise level of ``r`` (n,) over the abscissa ``x`` (n,) from the residual of
+    linear interpolation between neighbours (module doc); (sigma, dof)."""
+    order = np.argsort(x, kind="stable")
+    x, r = np.asarray(x, float)[order], np.asarray(r, float)[order]
+    if r.size < 3:
+        return 0.0, 0
+    span = x[2:] - x[:-2]
+    a = np.where(span > 0, (x[2:] - x[1:-1]) / np.where(span > 0, span, 1.0), 0.5)
+    b = 1.0 - a
+    d = r[1:-1] - a * r[:-2] - b * r[2:]
+    return float(np.sqrt(np.mean(d**2 / (1.0 + a**2 + b**2)))), int(d.size)
+
+
+def _floor(ch, y):
+    return _FLOOR[ch] * (float(np.median(np.abs(y))) if ch != "response" else 1.0)
+
+
+def initial_noise(log_s, channels: dict, stds: dict) -> Noise:
+    """First noise levels: the identification's stds where given, else the scatter of
+    the raw channel values (``channels[ch]`` (n,)) over ``log_s``."""
+    sigma, source, dof = {}, {}, {}
+    for ch, y in channels.items():
+        if stds.get(ch) is not None:
+            sigma[ch] = np.maximum(np.asarray(stds[ch], float), _floor(ch, y))
+            source[ch], dof[ch] = "identification", np.inf
+        else:
+            s, nu = interpolation_scatter(log_s, y)
+            sigma[ch] = np.full(len(y), max(s, _floor(ch, y)))
+            source[ch], dof[ch] = "scatter", nu
+    return Noise(sigma, source, dof)
+
+
+def noise_from_residuals(noise: Noise, log_s, residual: dict, values: dict) -> Noise:
+    """Replace every scatter-sourced level by the scatter of a fit's residuals
+    (``residual[ch]`` in the units of the channel)."""
+    sigma, dof = dict(noise.sigma), dict(noise.dof)
+    for ch, src in noise.source.items():
+        if src == "scatter":
+            s, nu = interpolation_scatter(log_s, residual[ch])
+            sigma[ch] = np.full(len(residual[ch]), max(s, _floor(ch, values[ch])))
+            dof[ch] = nu
+    return Noise(sigma, dict(noise.source), dof)
+
+
+def fit_test(chi2: float, n_data: int, n_params: int, noise: Noise) -> dict:
+    """Is a fit within the noise? (module doc). Returns ``p_value``,
+    ``rms_standardized`` (sqrt(chi2 / N)), ``dof`` and the ``test`` used."""
+    dof = n_data - n_params
+    rms = float(np.sqrt(chi2 / max(n_data, 1)))
+    if dof <= 0:
+        return {"p_value": None, "rms_standardized": rms, "dof": dof,
+                "test": f"none possible ({n_data} data, {n_params} parameters)"}
+    nu = sum(noise.dof[ch] for ch in ("omega2", "zeta") if noise.source[ch] == "scatter")
+    if nu == 0:
+        p = float(stats.chi2.sf(chi2, dof))
+        test = f"chi-square, {dof} degrees of freedom (noise from the identification)"
+    else:
+        p = float(stats.f.sf(chi2 / dof, dof, nu))
+        test = (f"F({dof}, {nu}) (noise from the level-to-level scatter of the "
+                f"residuals)")
+    return {"p_value": p, "rms_standardized": rms, "dof": dof, "test": test}
