@@ -44,7 +44,7 @@ from inverse.contradictions import NoiseLevels, iwan_contradictions
 from inverse.diagnosis_cv import held_out_top, leave_one_out, n_top
 from inverse.diagnosis_fit import fit_model
 from inverse.diagnosis_models import CAUSES, MODELS, Model, Observations
-from inverse.diagnosis_noise import (P_UNEXPLAINED, fit_test, initial_noise,
+from inverse.diagnosis_noise import (P_UNEXPLAINED, distortion, fit_test, initial_noise,
                                      noise_from_residuals)
 from inverse.diagnosis_params import physical_parameters
 from inverse.diagnosis_report import assemble
@@ -90,16 +90,18 @@ def observations_from(data: MeasuredData, mode: int | None = None):
                         "be tested")
     run = d.run_order.astype(float)
     span = float(run.max() - run.min())
-    if np.all(np.diff(d.run_order) > 0):
-        warnings.append("the levels were run in increasing order: thermal drift is "
-                        "confounded with amplitude (shuffle the run order or repeat "
-                        "the lowest level at the end)")
+    monotone = bool(np.all(np.diff(d.run_order) > 0) or np.all(np.diff(d.run_order) < 0))
+    if monotone:
+        warnings.append("the levels were run in order of amplitude: a drift with time "
+                        "cannot be told from an amplitude effect, so thermal-drift is not "
+                        "tested (shuffle the run order or repeat the lowest level at the "
+                        "end)")
     if d.level.size < 7:
         warnings.append(f"only {d.level.size} levels: several causes cannot be told "
                         "apart (see separability)")
     obs = Observations(level=d.level, s=s, omega2=d.omega2, zeta=d.zeta,
                        t_run=(run - run.min()) / span if span > 0 else 0 * run,
-                       log_r=log_r, response_controlled=rc, sigma={})
+                       log_r=log_r, response_controlled=rc, sigma={}, run_monotone=monotone)
     stds = {"omega2": d.omega2_std, "zeta": d.zeta_std, "response": None}
     return obs, d, stds, raw, warnings
 
@@ -110,6 +112,9 @@ def _unavailable(model: Model, obs: Observations):
             return "under response control the response amplitude is the abscissa"
         if obs.log_r is None:
             return "needs the response_amplitude column"
+    if model.has("thermal-drift") and obs.run_monotone:
+        return ("the levels were run in order of amplitude: a drift with time cannot be "
+                "told from an amplitude effect")
     return None
 
 
@@ -138,12 +143,15 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     """
     obs, d, stds, raw, warnings = observations_from(data, mode)
     log_s = np.log(obs.s)
-    noise = initial_noise(log_s, _values(obs), stds)
+    error = None if obs.log_r is None else {"response": distortion(log_s, obs.zeta)}
+    noise = initial_noise(log_s, _values(obs), stds, error)
     obs.sigma = noise.sigma
     models = [m for m in MODELS if _unavailable(m, obs) is None]
     unavailable = {m.name: _unavailable(m, obs) for m in MODELS if _unavailable(m, obs)}
     if "scatter" in noise.source.values():
-        first = _fit_all([m for m in models if len(m.causes) <= 1], obs)
+        known = noise.source["omega2"] == noise.source["zeta"] == "identification"
+        first = _fit_all([m for m in models if not m.causes or (len(m.causes) == 1
+                                                                and not known)], obs)
         ok = [f for f in first.values() if f.aicc is not None]
         ref = min(ok, key=lambda f: f.aicc) if ok else first["none"]
         noise = noise_from_residuals(noise, log_s, _channel_residuals(ref, obs), _values(obs))
@@ -187,7 +195,12 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         if k != "none":
             cv[k] = leave_one_out(fits[k], obs)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best}}
-    sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)
+    if cause == "none" or rivals or obs.n < 8:
+        sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)
+    else:
+        sep = {"inseparable": [], "untestable": {k: v for k, v in unavailable.items()
+                                                 if "+" not in k},
+               "note": f"not analysed: {cause} is named without a rival on {obs.n} levels"}
     return assemble(
         obs=obs, d=d, raw=raw, fits=fits, params=params, weight=weight, ic=ic,
         tests=tests, cv=cv, held=held, n_top=n_top(obs.n), noise=noise,

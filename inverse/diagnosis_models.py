@@ -91,7 +91,7 @@ _NONLINEAR = {
                     np.log(np.geomspace(1.05, 4.5, 8)))],
     "nonproportional-amplitude": [("gamma", -0.95, 0.6, np.linspace(-0.8, 0.4, 9)),
                                   ("kappa", 0.0, 5.0, np.array([0.0, 0.7, 1.8, 4.0]))],
-    "geometric-hardening": [("nu_hardening", 0.0, 3.0, np.array([0.2, 0.8, 1.6, 2.6])),
+    "geometric-hardening": [("nu_hardening", 0.0, 3.0, np.array([0.0, 0.6, 1.4, 2.5])),
                             ("s_contact", 0.0, 0.9, np.array([0.0, 0.25, 0.5, 0.75]))],
     "thermal-drift": [("b_drift", -4.0, 8.0, np.array([-2.0, 0.0, 2.0, 5.0]))],
     "quadratic-damping": [("m_damping", 0.3, 3.0, np.array([0.35, 0.7, 1.1, 1.7, 2.6])),
@@ -145,8 +145,9 @@ class Observations:
     """One mode's data as the fits use them, sorted by level.
 
     ``s`` is the base abscissa of eq. (1), ``log_r`` the response channel
-    ``log R_v - log s_v`` (None without one), ``t_run`` the run order scaled to [0, 1],
-    ``sigma`` the noise level per channel and level (set by the diagnosis)."""
+    ``log R_v - log s_v`` (None without one), ``t_run`` the run order scaled to [0, 1]
+    (``run_monotone``: the levels were run in order of amplitude), ``sigma`` the noise
+    level per channel and level (set by the diagnosis)."""
 
     level: np.ndarray
     s: np.ndarray
@@ -156,6 +157,7 @@ class Observations:
     log_r: np.ndarray | None
     response_controlled: bool
     sigma: dict
+    run_monotone: bool = False
 
     @property
     def n(self) -> int:

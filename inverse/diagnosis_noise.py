@@ -23,6 +23,13 @@ Sources, per channel (``omega2``, ``zeta``, log response):
   equivalent linear fit of a nonlinear FRF, whose residue absorbs part of the FRF's
   distortion, and from a sensor calibrated to about 1 %; a smooth departure of that
   size says nothing about the drive.
+* model error of the response channel (force control): a stepped sine at constant
+  force sweeps the amplitude from the peak down to 1/sqrt(2) of it across the
+  half-power band, ``ln sqrt(2) = 0.35`` in log amplitude, and the equivalent linear
+  fit averages the damping over that span; its damping ratio, and with it the
+  resonant amplitude read from the fit, is off by about half of it times the local
+  log-slope of the damping: ``0.17 |d ln zeta / d ln s|`` (:func:`distortion`), added
+  in quadrature.
 
 Test of fit (``unexplained``): with known noise the best fit's ``chi2`` follows a
 chi-square law with ``N - k`` degrees of freedom; with a scatter estimate of ``nu``
@@ -34,12 +41,12 @@ known-noise data, an rms residual 1.5x the noise).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
 
-__all__ = ["P_UNEXPLAINED", "Noise", "interpolation_scatter", "initial_noise",
+__all__ = ["P_UNEXPLAINED", "Noise", "interpolation_scatter", "distortion", "initial_noise",
            "noise_from_residuals", "fit_test"]
 
 #: Tail probability below which the best fit leaves the data outside their noise.
@@ -50,12 +57,14 @@ _FLOOR = {"omega2": 1e-9, "zeta": 1e-7, "response": 1e-2}
 @dataclass
 class Noise:
     """Noise level per channel and level (``sigma[ch]`` (n,)), its source per channel
-    (``identification`` or ``scatter``) and the degrees of freedom of a scatter
-    estimate (``dof[ch]``, inf for the identification's stds)."""
+    (``identification`` or ``scatter``), the degrees of freedom of a scatter
+    estimate (``dof[ch]``, inf for the identification's stds) and the model error
+    added in quadrature (``model_error[ch]``)."""
 
     sigma: dict
     source: dict
     dof: dict
+    model_error: dict = field(default_factory=dict)
 
 
 def interpolation_scatter(x, r):
@@ -76,9 +85,23 @@ def _floor(ch, y):
     return _FLOOR[ch] * (float(np.median(np.abs(y))) if ch != "response" else 1.0)
 
 
-def initial_noise(log_s, channels: dict, stds: dict) -> Noise:
+def distortion(log_s, zeta):
+    """Model error of the log response amplitude of a force-controlled level (module
+    doc): ``0.17 |d ln zeta / d ln s|`` per level."""
+    if len(zeta) < 2:
+        return np.zeros(len(zeta))
+    return 0.17 * np.abs(np.gradient(np.log(zeta), log_s))
+
+
+def _with_error(sigma, error):
+    return sigma if error is None else np.sqrt(sigma**2 + error**2)
+
+
+def initial_noise(log_s, channels: dict, stds: dict, model_error=None) -> Noise:
     """First noise levels: the identification's stds where given, else the scatter of
-    the raw channel values (``channels[ch]`` (n,)) over ``log_s``."""
+    the raw channel values (``channels[ch]`` (n,)) over ``log_s``; ``model_error``
+    (``{channel: (n,)}``) is added in quadrature to scatter-sourced levels."""
+    model_error = model_error or {}
     sigma, source, dof = {}, {}, {}
     for ch, y in channels.items():
         if stds.get(ch) is not None:
@@ -86,9 +109,10 @@ def initial_noise(log_s, channels: dict, stds: dict) -> Noise:
             source[ch], dof[ch] = "identification", np.inf
         else:
             s, nu = interpolation_scatter(log_s, y)
-            sigma[ch] = np.full(len(y), max(s, _floor(ch, y)))
+            sigma[ch] = _with_error(np.full(len(y), max(s, _floor(ch, y))),
+                                    model_error.get(ch))
             source[ch], dof[ch] = "scatter", nu
-    return Noise(sigma, source, dof)
+    return Noise(sigma, source, dof, model_error)
 
 
 def noise_from_residuals(noise: Noise, log_s, residual: dict, values: dict) -> Noise:
@@ -98,9 +122,10 @@ def noise_from_residuals(noise: Noise, log_s, residual: dict, values: dict) -> N
     for ch, src in noise.source.items():
         if src == "scatter":
             s, nu = interpolation_scatter(log_s, residual[ch])
-            sigma[ch] = np.full(len(residual[ch]), max(s, _floor(ch, values[ch])))
+            sigma[ch] = _with_error(np.full(len(residual[ch]), max(s, _floor(ch, values[ch]))),
+                                    noise.model_error.get(ch))
             dof[ch] = nu
-    return Noise(sigma, dict(noise.source), dof)
+    return Noise(sigma, dict(noise.source), dof, noise.model_error)
 
 
 def fit_test(chi2: float, n_data: int, n_params: int, noise: Noise) -> dict:

@@ -32,7 +32,7 @@ import math
 import zlib
 import numpy as np
 
-from cases.synthetic_series.hidden import add_effects
+from cases.synthetic_series.hidden import TooLarge, add_effects
 from cases.synthetic_series.identification import pole_std
 from cases.synthetic_series.levels import SyntheticSeries, force_for, noisy, simulate_levels
 from cases.synthetic_series.mode import JointedMode, level_frf
@@ -156,7 +156,10 @@ def _attempt(rng, causes, ooc, n, control):
     rel /= rel[-1]
     run, truth["run_kind"] = _run_order(rng, n, "thermal-drift" in causes
                                         or ooc == "preload-loss")
-    exciter, scale = add_effects(rng, mode, causes, ooc, X_top, sig, rel, truth)
+    try:
+        exciter, scale = add_effects(rng, mode, causes, ooc, X_top, sig, rel, truth)
+    except TooLarge:
+        return None
     if mode.c0 <= 0:
         return None
     truth.update(level_ratio=ratio, held_relative=rel)
@@ -187,6 +190,8 @@ def generate_series(label: str, seed: int, n_levels: int | None = None,
         if drawn is None:
             continue
         series = simulate_levels(rng, drawn, control)
+        if series is not None and "macro-slip" in causes and series.truth["x_peak"][-1] < 1.02:
+            series = None                  # the shortfall kept the joint in micro-slip
         if series is not None:
             series.truth.update(label=label, causes=truth_of(label), ooc=ooc, seed=seed,
                                 control=control, n_levels=n, attempts=attempt + 1)

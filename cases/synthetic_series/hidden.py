@@ -11,7 +11,11 @@ import numpy as np
 from cases.synthetic_series import effects as fx
 from cases.synthetic_series.mode import Exciter, JointedMode
 
-__all__ = ["add_effects"]
+__all__ = ["add_effects", "TooLarge"]
+
+
+class TooLarge(ValueError):
+    """An effect of the drawn size would be implausible for the drawn structure."""
 
 
 def _logu(rng, lo, hi):
@@ -63,8 +67,14 @@ def add_effects(rng, mode: JointedMode, causes, ooc, X_top, sig, rel, truth):
     """Add the effects of ``causes`` (catalogue ids) or ``ooc`` to ``mode`` in place.
 
     Returns (exciter or None, force scale per level or None); records families and
-    sizes in ``truth``."""
+    sizes in ``truth``. Raises :class:`TooLarge` when a size exceeds what the
+    structure makes plausible (a frequency effect above 4 % of omega^2, an added
+    damping above the top level's own damping ratio): the caller draws again."""
     w0, n = mode.omega0, rel.size
+    zeta_top = mode.c0 / (2 * w0) + truth["dzeta_top_joint"]
+    sized = ooc or any(c != "nonproportional-amplitude" for c in causes)
+    if sized and max(150 * sig[0] / w0**2 / 0.04, 150 * sig[1] / zeta_top) > 1.0:
+        raise TooLarge("noise too large for plausible effect sizes")
     exciter, scale = None, None
     for c in causes:
         if c == "geometric-hardening":

@@ -38,10 +38,11 @@ def noisy(rng, H, eps):
     return H * (1 + eps * n) + 0.02 * eps * np.abs(H).max() * m
 
 
-def force_for(mode, X, run=1.0) -> float:
-    """Force amplitude that holds amplitude ``X`` at resonance (``Re D = 0``), N."""
+def force_for(mode, X, run=1.0, c_e=0.0) -> float:
+    """Drive amplitude that holds amplitude ``X`` at resonance (``Re D = 0``), N;
+    with back-EMF damping ``c_e`` the exciter's output before the back-EMF."""
     w_res = math.sqrt(max(mode.stiffness(X, 0.0, run).real, 1e-12))
-    return X * float(mode.stiffness(X, w_res, run).imag)
+    return X * float(abs(mode.stiffness(X, w_res, run) + 1j * w_res * c_e))
 
 
 def simulate_levels(rng, drawn: dict, control: str) -> SyntheticSeries | None:
@@ -53,11 +54,12 @@ def simulate_levels(rng, drawn: dict, control: str) -> SyntheticSeries | None:
     if control == "response":
         held = X_top * rel
     else:
-        F_top = force_for(mode, X_top, float(run[-1]))
+        F_top = force_for(mode, X_top, float(run[-1]), 0.0 if exciter is None else exciter.c_e)
         held = F_top * rel
-        if exciter is not None:
+        if exciter is not None:                             # volts; top reaches X_top
+            exciter.g = 1.0
             exciter.g = F_top / float(exciter.force(1.0))
-            held = rel.copy()                               # volts
+            held = rel.copy()
     scale = drawn["scale"] if drawn["scale"] is not None else np.ones(n)
     rows, frfs, x_peak = [], [], []
     for v in range(n):
