@@ -5,13 +5,14 @@ Candidates: the base model (``none``), each cause of the catalogue alone and eve
 (:mod:`inverse.diagnosis_models`), fitted by weighted least squares against the noise
 levels of :mod:`inverse.diagnosis_noise` (:mod:`inverse.diagnosis_fit`).
 
-Evidence and weights. Every candidate gets its AICc (known noise levels: the
-log-likelihood is ``-chi2/2``). Its weight is an Akaike weight with prior odds
-``exp(-T/2)`` per cause it adds, ``T`` = :data:`T_CAUSE` = 6:
+Evidence and weights. Every candidate gets its AIC (known noise levels: the
+log-likelihood is ``-chi2/2``; :mod:`inverse.diagnosis_fit` says why not AICc). Its
+weight is an Akaike weight with prior odds ``exp(-T/2)`` per cause it adds, ``T`` =
+:data:`T_CAUSE` = 6:
 
-    IC_i = AICc_i + T n_causes_i,    w_i = exp(-IC_i/2) / sum_j exp(-IC_j/2).
+    IC_i = AIC_i + T n_causes_i,    w_i = exp(-IC_i/2) / sum_j exp(-IC_j/2).
 
-So a cause is named only when it lowers the AICc by more than 6 (evidence ratio
+So a cause is named only when it lowers the AIC by more than 6 (evidence ratio
 ``e^3 = 20``), and a second cause only when it lowers it by 6 more. Argument: with
 correct noise levels and no effect, a nested extension with ``q`` extra parameters
 lowers ``chi2`` by a chi-square(q) amount, so it passes with probability
@@ -45,7 +46,7 @@ from inverse.diagnosis_cv import held_out_top, leave_one_out, n_top
 from inverse.diagnosis_fit import fit_model
 from inverse.diagnosis_models import CAUSES, MODELS, Model, Observations
 from inverse.diagnosis_noise import (P_UNEXPLAINED, distortion, fit_test, initial_noise,
-                                     noise_from_residuals)
+                                     noise_from_residuals, test_chi2)
 from inverse.diagnosis_params import physical_parameters
 from inverse.diagnosis_report import assemble
 from inverse.diagnosis_separability import separability
@@ -132,6 +133,17 @@ def _values(obs):
     return out
 
 
+def _test_chi2(fit, obs):
+    """chi2 of ``fit`` for the test of fit (identification model error under force
+    control, :func:`inverse.diagnosis_noise.test_chi2`)."""
+    nc, n = len(obs.channels), obs.n
+    res = fit.residual.reshape(nc, n)
+    sig = np.stack([obs.sigma[ch] for ch in obs.channels])
+    fitted = np.stack([obs.omega2, obs.zeta])[:2] - res[:2] * sig[:2]
+    rows = np.broadcast_to(fit.train, (nc, n))
+    return test_chi2(res, sig, fitted, np.log(obs.s), rows, not obs.response_controlled)
+
+
 def _fit_all(models, obs):
     return {m.name: fit_model(m, obs) for m in models}
 
@@ -152,8 +164,8 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         known = noise.source["omega2"] == noise.source["zeta"] == "identification"
         first = _fit_all([m for m in models if not m.causes or (len(m.causes) == 1
                                                                 and not known)], obs)
-        ok = [f for f in first.values() if f.aicc is not None]
-        ref = min(ok, key=lambda f: f.aicc) if ok else first["none"]
+        ok = [f for f in first.values() if f.aic is not None]
+        ref = min(ok, key=lambda f: f.aic) if ok else first["none"]
         noise = noise_from_residuals(noise, log_s, _channel_residuals(ref, obs), _values(obs))
         obs.sigma = noise.sigma
     fits = _fit_all(models, obs)
@@ -161,13 +173,14 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     run_span = float(np.ptp(d.run_order))
     params = {k: physical_parameters(f, obs, run_span) for k, f in fits.items()}
 
-    ic = {k: f.aicc + T_CAUSE * len(f.model.causes) for k, f in fits.items()
-          if f.aicc is not None}
+    ic = {k: f.aic + T_CAUSE * len(f.model.causes) for k, f in fits.items()
+          if f.aic is not None}
     lo = min(ic.values())
     w = {k: float(np.exp(-(v - lo) / 2)) for k, v in ic.items()}
     total = sum(w.values())
     weight = {k: w.get(k, 0.0) / total for k in fits}
-    tests = {k: fit_test(f.chi2, f.n_data, f.n_params, noise) for k, f in fits.items()}
+    tests = {k: fit_test(_test_chi2(f, obs), f.n_data, f.n_params, noise)
+             for k, f in fits.items()}
 
     levels_noise = NoiseLevels(noise.sigma["omega2"], noise.sigma["zeta"],
                                noise.source["omega2"])

@@ -13,8 +13,11 @@ Jacobian and trial steps are one batched evaluation each. A refit on a subset of
 levels (cross-validation) starts from the fit to all levels.
 
 Information criteria (``k`` model parameters, ``N`` data in the fit; the noise levels
-are not fitted): ``AICc = chi2 + 2k + 2k(k+1)/(N-k-1)`` (Hurvich & Tsai 1989),
-undefined when ``N <= k + 1``; ``BIC = chi2 + k ln N``.
+are not fitted): ``AIC = chi2 + 2k``, defined when ``N > k``. With known noise levels
+the expected optimism of ``chi2`` is exactly ``2k`` for a linear model, so AIC needs
+no small-sample correction; the AICc term ``2k(k+1)/(N-k-1)`` (Hurvich & Tsai 1989)
+corrects for a noise variance estimated from the model's own residuals, which is not
+done here (it is reported, not used). ``BIC = chi2 + k ln N``.
 """
 from __future__ import annotations
 
@@ -45,6 +48,7 @@ class Fit:
     chi2: float
     n_data: int
     n_params: int
+    aic: float | None
     aicc: float | None
     bic: float
     parameters: dict = field(default_factory=dict)
@@ -104,9 +108,11 @@ def evaluate(model: Model, obs: Observations, theta, rows):
 
 
 def information_criteria(chi2: float, k: int, n: int):
-    """(AICc or None when ``n <= k + 1``, BIC) with known noise levels (module doc)."""
+    """(AIC or None when ``n <= k``, AICc or None when ``n <= k + 1``, BIC) with known
+    noise levels (module doc)."""
+    aic = chi2 + 2 * k if n > k else None
     aicc = chi2 + 2 * k + 2 * k * (k + 1) / (n - k - 1) if n - k - 1 > 0 else None
-    return aicc, chi2 + k * np.log(n)
+    return aic, aicc, chi2 + k * np.log(n)
 
 
 def _bounds(model):
@@ -193,9 +199,10 @@ def _finish(model, obs, cands, train):
     i = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
     k = model.n_params(obs.log_r is not None)
     n = int(rows.sum())
-    aicc, bic = information_criteria(float(f[i]), k, n)
+    aic, aicc, bic = information_criteria(float(f[i]), k, n)
     return Fit(model=model, theta=cands[i], linear=x[i], residual=r[i], log_s=log_s[i],
-               train=train, chi2=float(f[i]), n_data=n, n_params=k, aicc=aicc, bic=bic)
+               train=train, chi2=float(f[i]), n_data=n, n_params=k, aic=aic, aicc=aicc,
+               bic=bic)
 
 
 def fit_model(model: Model, obs: Observations, train=None, start=None, iters: int = 25,

@@ -47,18 +47,20 @@ def _evidence(fits, unavailable, weight, ic, tests):
                     "weight": 0.0}
     for name, f in fits.items():
         e = {"causes": list(f.model.causes) or ["none"], "available": True,
-             "chi2": f.chi2, "n_params": f.n_params, "n_data": f.n_data, "aicc": f.aicc,
-             "bic": f.bic, "delta_bic": none.bic - f.bic, "weight": weight[name],
-             "p_value": tests[name]["p_value"]}
-        if f.aicc is None:
-            e["delta_aicc"] = None
-            e["reason"] = (f"{f.n_data} data for {f.n_params} parameters: AICc needs more "
-                           f"than {f.n_params + 1} data")
-        elif none.aicc is None:
-            e["delta_aicc"] = None
-            e["reason"] = "the base model's AICc is undefined (too few data)"
+             "chi2": f.chi2, "n_params": f.n_params, "n_data": f.n_data, "aic": f.aic,
+             "aicc": f.aicc, "bic": f.bic, "delta_bic": none.bic - f.bic,
+             "weight": weight[name], "p_value": tests[name]["p_value"]}
+        e["delta_aicc"] = (None if f.aicc is None or none.aicc is None
+                           else none.aicc - f.aicc)
+        if f.aic is None:
+            e["delta_aic"] = None
+            e["reason"] = (f"cannot be fitted: {f.n_data} data for {f.n_params} "
+                           f"parameters")
+        elif none.aic is None:
+            e["delta_aic"] = None
+            e["reason"] = "the base model cannot be fitted (too few data)"
         else:
-            e["delta_aicc"] = none.aicc - f.aicc
+            e["delta_aic"] = none.aic - f.aic
         ev[name] = e
     return ev
 

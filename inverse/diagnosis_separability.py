@@ -3,8 +3,8 @@ levels, run order and noise.
 
 For each testable cause A, a noise-free series is built from the base fit plus A's
 signature (:func:`signature`) scaled so that A is *just* detectable: the base model
-misses it by ``chi2 = T + (penalty of A's extra parameters)``, i.e. A beats the base
-by the naming threshold ``T`` of :mod:`inverse.diagnose`. Every other single cause B is
+misses it by ``chi2 = T + 2 q_A`` (``q_A`` A's extra parameters), i.e. A beats the
+base by the naming threshold ``T`` of :mod:`inverse.diagnose` in AIC. Every other single cause B is
 fitted to that series; A and B cannot be separated when B reaches at least the
 ambiguity fraction of A's weight there (``IC_B - IC_A < 2 ln(1/w)``), i.e. the
 measurement would call a just-detectable A ambiguous with B (or name B). A cause whose
@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import replace
 import numpy as np
 
-from inverse.diagnosis_fit import fit_model, information_criteria
+from inverse.diagnosis_fit import fit_model
 from inverse.diagnosis_models import CAUSES, Model, Observations, slip_shapes
 from inverse.diagnosis_params import physical_parameters
 from inverse.iwan_modal import kappa1_per_R, kappa_ratio
@@ -116,7 +116,7 @@ def _with_data(obs, omega2, zeta, log_r):
 
 
 def _ic(fit, t_cause):
-    return None if fit.aicc is None else fit.aicc + t_cause * len(fit.model.causes)
+    return None if fit.aic is None else fit.aic + t_cause * len(fit.model.causes)
 
 
 def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
@@ -131,7 +131,7 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
     for m in models:
         if len(m.causes) == 1:
             f = fits[m.name]
-            if f.aicc is None:
+            if f.aic is None:
                 untestable[m.name] = (f"{f.n_data} data for {f.n_params} parameters: "
                                       "the criterion is undefined")
             else:
@@ -148,8 +148,7 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
             continue
         scale = 1.0 / np.linalg.norm(e)
         ka = fits[a].n_params
-        need = t_cause + (information_criteria(0.0, ka, base.n_data)[0]
-                          - information_criteria(0.0, base.n_params, base.n_data)[0])
+        need = t_cause + 2.0 * (ka - base.n_params)
 
         def synth(c):
             vals = [pred[i] + c * eff[i] for i in range(len(obs.channels))]
