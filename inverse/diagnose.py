@@ -50,7 +50,7 @@ from inverse.diagnosis_noise import (P_UNEXPLAINED, distortion, fit_test, initia
 from inverse.diagnosis_params import physical_parameters
 from inverse.diagnosis_report import assemble
 from inverse.diagnosis_separability import separability
-from inverse.diagnosis_text import own_contradictions
+from inverse.diagnosis_text import chi_at_bound, own_contradictions
 
 __all__ = ["CAUSES", "ALL_CAUSES", "T_CAUSE", "W_AMBIGUOUS", "observations_from",
            "diagnose"]
@@ -155,7 +155,7 @@ def _fit_all(models, obs):
     fits = {m.name: fit_model(m, obs) for m in models if len(m.causes) < 2}
     for m in models:
         if len(m.causes) == 2:
-            fits[m.name] = fit_model(m, obs, n_starts=3, extra_starts=_pair_starts(m, fits))
+            fits[m.name] = fit_model(m, obs, n_starts=5, extra_starts=_pair_starts(m, fits))
     return fits
 
 
@@ -220,6 +220,8 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
                 f"({best}) would fit (p = {lenient:.2g}): the misfit may come from the "
                 f"identification of nonlinear FRFs; a response-controlled test would tell")
 
+    if best != "none" and chi_at_bound(params[best], best) is not None:
+        found.append(chi_at_bound(params[best], best))
     base_err, base_res, base_why = leave_one_out(base, obs)
     cv = {"none": (base_err, base_res, base_why)}
     for k in pool:

@@ -120,8 +120,8 @@ def _bounds(model):
     return np.array([a[1] for a in nl]), np.array([a[2] for a in nl])
 
 
-def _grid(model, coarse=False):
-    axes = [a[3][::2] if coarse and a[3].size > 3 else a[3] for a in model.nonlinear]
+def _grid(model):
+    axes = [a[3] for a in model.nonlinear]
     return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
 
 
@@ -211,14 +211,13 @@ def fit_model(model: Model, obs: Observations, train=None, start=None, iters: in
 
     Without ``start``: grid search over the nonlinear parameters, then refinement from
     the ``n_starts`` best grid points that are not neighbours, and from every theta of
-    ``extra_starts`` (then the grid takes every other value per axis: a pair of causes
-    starts from the fits of each cause alone). With ``start`` (a theta, e.g. the fit
-    to all levels): refinement from there only.
+    ``extra_starts`` (a pair of causes also starts from the fits of each cause alone).
+    With ``start`` (a theta, e.g. the fit to all levels): refinement from there only.
     """
     train = np.ones(obs.n, bool) if train is None else np.asarray(train, bool)
     rows = np.tile(train, len(obs.channels))
     if start is None:
-        grid = _grid(model, coarse=bool(extra_starts))
+        grid = _grid(model)
         rss = _rss(model, obs, grid, rows)
         order = np.argsort(np.where(np.isfinite(rss), rss, np.inf))
         span = np.ptp(grid, axis=0) + 1e-300

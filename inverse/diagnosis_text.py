@@ -7,7 +7,7 @@ import numpy as np
 
 from inverse.contradictions import Z_STATE, Contradiction
 
-__all__ = ["own_contradictions", "describe", "CAUSE_WORDS"]
+__all__ = ["own_contradictions", "chi_at_bound", "describe", "CAUSE_WORDS"]
 
 #: One sentence per cause: what it does to the data.
 CAUSE_WORDS = {
@@ -56,6 +56,17 @@ def own_contradictions(d, base_params: dict, base_zeta, noise) -> list:
             f"({100 * z[a]:.4g} % -> {100 * z[b]:.4g} %) are hardly tied by any "
             f"micro-slip joint"), {"chi": chi}))
     return out
+
+
+def chi_at_bound(params: dict, model: str):
+    """Statement when the named model's fit puts chi on the edge of (-1, 0), or None."""
+    chi = params.get("chi")
+    if chi is None or -0.98 < chi < -0.02:
+        return None
+    return Contradiction("chi-at-bound", (
+        f"the named model ({model}) puts chi at {chi:.3f}, on the edge of the Iwan range "
+        f"-1 < chi < 0: its joint is hardly a micro-slip Iwan joint (the fit leans on "
+        f"the bound)"), {"chi": chi, "model": model})
 
 
 def _fmt_causes(cause, also):
