@@ -9,8 +9,8 @@ response control (response for 40 % of the series that can have it), natural
 frequency 20-500 Hz, viscous damping ratio 0.2-2 %, chi in (-0.85, -0.15), Dirac weight
 beta 0.2-5, FRF noise 0.02-0.5 % with 31-81 lines, the run order (shuffled, ascending,
 or up-and-down; never ascending when the hidden effect follows time), the joint's
-damping growth (15-400 identification standard deviations, frequency drop at most 8 %
-of omega^2), the top slip 0.3-0.9 phi_max (more for macro-slip), and each effect's
+damping growth (15-400 identification standard deviations of a linear level, 100-400
+for a preload loss; frequency drop at most 8 % of omega^2), the top slip 0.3-0.9 phi_max (more for macro-slip), and each effect's
 family and size. Sizes are in units of the identification's standard uncertainty at
 the top level (a sizing pass identifies the top level without effects): 15-120
 (macro-slip departure from the power law 15-200; force shortfall 8-40 % at the top;
@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import zlib
+
 import numpy as np
 
 from cases.synthetic_series.hidden import TooLarge, add_effects
@@ -81,11 +82,11 @@ def _run_order(rng, n, timed):
     return rng.permutation(n) + 1, kind
 
 
-def _lines(mode, x_top, n_lines, c_e=0.0):
+def _lines(mode, x_top, n_lines):
     """Lines covering the resonance from the lowest to the top amplitude (rad/s)."""
     k_in, k_q = describing_function(mode.joint, np.array([1e-9, x_top]))
     w_lo = np.sqrt(mode.omega2_lin + k_in)
-    z = (mode.c0 + c_e + k_q / w_lo) / (2 * w_lo)
+    z = (mode.c0 + k_q / w_lo) / (2 * w_lo)
     lo = min(w_lo * (1 - 5 * z)) * 0.995
     hi = max(w_lo * (1 + 5 * z)) * 1.002
     return np.linspace(lo, hi, n_lines)
@@ -127,10 +128,9 @@ def _attempt(rng, causes, ooc, n, control):
     omega0, p = 2 * math.pi * f0, chi + 1
     x_top = rng.uniform(0.3, 0.9)
     # joint: damping growth at the top in stds of a linear level, frequency drop <= 8 %
-    probe = JointedMode(omega0**2 / 2, 2 * zeta0 * omega0,
-                        IwanParameters.from_density(1e-9, chi, _PHI_MAX, 0.0))
-    probe.omega2_lin = omega0**2 - probe.joint.K_T
-    sig0 = _sigma_at(rng, probe, _lines(probe, 1e-9, n_lines), 1e-9, eps, control)
+    weak = IwanParameters.from_density(1e-9, chi, _PHI_MAX, 0.0)
+    linear = JointedMode(omega0**2 - weak.K_T, 2 * zeta0 * omega0, weak)
+    sig0 = _sigma_at(rng, linear, _lines(linear, 1e-9, n_lines), 1e-9, eps, control)
     lo_u = 100.0 if ooc == "preload-loss" else 15.0
     tie = kappa2_exact(1.0, chi) / -kappa1(1.0, chi)
     dz_top = min(_logu(rng, lo_u, 400) * sig0[1], 0.04 / tie, 3 * zeta0)
