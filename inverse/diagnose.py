@@ -199,8 +199,12 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     found += own_contradictions(d, params["none"], base_zeta, levels_noise)
     refuted = [c for c in found if c.kind in _REFUTING]
     pool = [k for k in ic if not (refuted and k == "none")]
-    inside = [k for k in pool if tests[k]["p_value"] is not None
-              and tests[k]["p_value"] >= P_UNEXPLAINED]
+    testable = [k for k in pool if tests[k]["p_value"] is not None]
+    inside = [k for k in testable if tests[k]["p_value"] >= P_UNEXPLAINED]
+    if not testable and pool:
+        warnings.append("too few levels to test any candidate's fit against the noise "
+                        "(as many parameters as data): the choice rests on the weights")
+        inside = pool
     if inside:
         best = max(inside, key=weight.get)
         causes = fits[best].model.causes
@@ -219,7 +223,6 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
                 f"omega2 and zeta (0.17 x their log-amplitude slope) the closest candidate "
                 f"({best}) would fit (p = {lenient:.2g}): the misfit may come from the "
                 f"identification of nonlinear FRFs; a response-controlled test would tell")
-
     if best != "none" and chi_at_bound(params[best], best) is not None:
         found.append(chi_at_bound(params[best], best))
     base_err, base_res, base_why = leave_one_out(base, obs)

@@ -99,8 +99,9 @@ def assemble(*, obs, d, raw, fits, params, weight, ic, tests, cv, held, n_top, n
     n = obs.n
     ch = len(obs.channels)
     stdres = lambda f: f.residual.reshape(ch, n).T  # noqa: E731
+    unfit = [k for k, f in fits.items() if f.aic is None]
     summary = describe(cause, also, params[best], named_gain, tests[best],
-                       contradictions, best, rivals, n, separability["inseparable"])
+                       contradictions, best, rivals, n, separability["inseparable"], unfit)
     return {
         "cause": cause, "also": also, "mode": int(d.mode[0]),
         "control": "response" if obs.response_controlled else "force",

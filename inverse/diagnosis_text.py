@@ -74,15 +74,22 @@ def _fmt_causes(cause, also):
 
 
 def describe(cause: str, also: list, params: dict, gain, test: dict, contradictions: list,
-             closest: str, rivals: list, n_levels: int, inseparable: list) -> str:
-    """One paragraph naming the cause in plain words (``summary``)."""
+             closest: str, rivals: list, n_levels: int, inseparable: list,
+             unfit: list = ()) -> str:
+    """One paragraph naming the cause in plain words (``summary``); ``unfit`` the
+    candidates with more parameters than data."""
     chi = params.get("chi", float("nan"))
     g = "n/a" if gain is None else f"{gain:.2g}"
     if cause == "unexplained":
+        p = "n/a" if test["p_value"] is None else f"{test['p_value']:.2g}"
         text = (f"No cause of the catalogue, alone or two together, brings the data "
                 f"within their noise: the closest candidate (`{closest}`) leaves an rms "
                 f"residual of {test['rms_standardized']:.3g} noise standard deviations "
-                f"(p = {test['p_value']:.2g}, {test['test']}).")
+                f"(p = {p}, {test['test']}).")
+        if unfit:
+            text += (f" {len(unfit)} candidate(s) have more parameters than these "
+                     f"{n_levels} levels give data ({', '.join(unfit)}): with more levels "
+                     f"they might explain the data.")
     elif cause == "none":
         if contradictions:
             text = "The base model is kept, but the data contradict it (see contradictions)."
@@ -96,8 +103,11 @@ def describe(cause: str, also: list, params: dict, gain, test: dict, contradicti
                     f"deviations): no extension earned its extra parameters.")
     else:
         words = "; ".join(CAUSE_WORDS[c] for c in [cause, *also])
-        text = (f"Cause {_fmt_causes(cause, also)}: {words}. The extended model cuts the "
-                f"leave-one-level-out prediction error by a factor {g} (chi = {chi:.3f}).")
+        gain_text = (f"cuts the leave-one-level-out prediction error by a factor {g}"
+                     if gain is not None else "has too many parameters for a "
+                     "leave-one-level-out error on these levels")
+        text = (f"Cause {_fmt_causes(cause, also)}: {words}. The extended model "
+                f"{gain_text} (chi = {chi:.3f}).")
     if rivals:
         text += (" Ambiguous: " + ", ".join(f"`{r}`" for r in rivals)
                  + " explain(s) the data nearly as well.")

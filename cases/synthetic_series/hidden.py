@@ -1,7 +1,10 @@
 """The hidden effects of a synthetic series, drawn and sized (families and ranges in
 :mod:`cases.synthetic_series.draw`). Sizes are in identification standard deviations
 at the top level, ``sig = (sigma_omega2, sigma_zeta)``; ``X_top`` is the top modal
-amplitude (m), ``rel`` the held levels relative to the top (increasing, last 1)."""
+amplitude (m), ``rel`` the held levels relative to the top (increasing, last 1), ``run``
+their run order. Sizes are those of the effect as realized on the levels: a drift over
+the run; a preload loss (20-60 % of the preload lost over the test) must change the
+joint damping by at least 15 stds at some level, or the draw is rejected."""
 from __future__ import annotations
 
 import math
@@ -63,7 +66,16 @@ def _shortfall(rng, rel, truth):
     return Exciter(v_s=v_s, a=a), None
 
 
-def add_effects(rng, mode: JointedMode, causes, ooc, X_top, sig, rel, truth):
+def _preload_change(mode, rho, dzeta_top, rel, run, n, tau):
+    """Largest change of the joint damping over the levels (each at its amplitude and
+    its place in the run order) for a preload loss ``rho``: the joint damping of level
+    ``v`` scales as ``rel_v^p (1 - rho f(run_v))^-p``."""
+    p = mode.joint.chi + 1
+    f = fx.run_shape(run, n, tau)
+    return float(np.max(dzeta_top * rel**p * ((1 - rho * f) ** -p - 1)))
+
+
+def add_effects(rng, mode: JointedMode, causes, ooc, X_top, sig, rel, truth, run):
     """Add the effects of ``causes`` (catalogue ids) or ``ooc`` to ``mode`` in place.
 
     Returns (exciter or None, force scale per level or None); records families and
@@ -72,7 +84,8 @@ def add_effects(rng, mode: JointedMode, causes, ooc, X_top, sig, rel, truth):
     damping above the top level's own damping ratio): the caller draws again."""
     w0, n = mode.omega0, rel.size
     zeta_top = mode.c0 / (2 * w0) + truth["dzeta_top_joint"]
-    sized = ooc or any(c != "nonproportional-amplitude" for c in causes)
+    sized = ooc in ("softening", "damping-falls") or any(
+        c != "nonproportional-amplitude" for c in causes)
     if sized and max(150 * sig[0] / w0**2 / 0.04, 150 * sig[1] / zeta_top) > 1.0:
         raise TooLarge("noise too large for plausible effect sizes")
     exciter, scale = None, None
@@ -110,9 +123,11 @@ def add_effects(rng, mode: JointedMode, causes, ooc, X_top, sig, rel, truth):
                                                           * X_top ** (a - 1)), a))
         truth.update(ooc_sigma=u, ooc_exponent=a)
     elif ooc == "preload-loss":
-        p = mode.joint.chi + 1
-        rho = min(1 - (1 + u * sig[1] / truth["dzeta_top_joint"]) ** (-1 / p), 0.6)
         tau = None if rng.random() < 0.5 else rng.uniform(0.15, 0.8)
+        rho = rng.uniform(0.2, 0.6)
+        change = _preload_change(mode, rho, truth["dzeta_top_joint"], rel, run, n, tau)
+        if change < 15 * sig[1]:
+            raise TooLarge("the joint is too weak for a visible preload loss")
         mode.preload_loss = (rho, lambda r: fx.run_shape(r, n, tau))
-        truth.update(ooc_sigma=u, preload_rho=rho, preload_tau=tau)
+        truth.update(ooc_sigma=change / sig[1], preload_rho=rho, preload_tau=tau)
     return exciter, scale
