@@ -15,6 +15,9 @@ from cases.paper_data import DATA_FILE
 from ident.errors import InputError
 
 CASES = ("double-beam",)
+#: Cases with a nonlinear (jointed) model: ``iwanfe backbone --case``
+#: (:func:`nonlinear_case`).
+NONLINEAR_CASES = ("double-beam", "lumped")
 #: Measured-data CSV shipped with each case (``iwanfe diagnose --case NAME``).
 MEASURED_DATA = {"double-beam": DATA_FILE}
 
@@ -65,3 +68,13 @@ def fe_check(name: str, measured_omega2: float) -> dict:
     from cases.double_beam.fe_check import double_beam_fe_check
 
     return double_beam_fe_check(measured_omega2=measured_omega2)
+
+
+def nonlinear_case(name: str, **options):
+    """The jointed model of case ``name`` in :data:`NONLINEAR_CASES`
+    (:func:`cases.nonlinear_case.build_nonlinear_case`)."""
+    if name not in NONLINEAR_CASES:
+        raise InputError(f"unknown case {name!r}; known: {', '.join(NONLINEAR_CASES)}")
+    from cases.nonlinear_case import build_nonlinear_case
+
+    return build_nonlinear_case(name, **options)

@@ -29,6 +29,8 @@ COMMANDS = [
     "reproduce",
     "uncertainty",
     "diagnose",
+    "backbone",
+    "update",
 ]
 
 

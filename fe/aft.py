@@ -28,7 +28,7 @@ from joints import kernel
 from joints.jenkins import jenkins_update
 from joints.kernel_reference import KERNEL_STAMP
 
-__all__ = ["aft_joint_force"]
+__all__ = ["aft_joint_force", "aft_slider_state"]
 
 
 def _aft_start(slip_t, k, phi):
@@ -254,3 +254,36 @@ def aft_joint_force(slip_t: np.ndarray, bank: JointBank, P=None, E=None, compile
     force, Jg = _aft_march(slip_t, np.ascontiguousarray(k), np.ascontiguousarray(phi),
                            np.ascontiguousarray(P), np.ascontiguousarray(E), want)
     return force, (Jg if want else None)
+
+
+def aft_slider_state(slip_t: np.ndarray, bank: JointBank, sample: int = 0) -> np.ndarray:
+    """Slider anchors (m) of the periodic loop at one sample of the period.
+
+    The banks are marched around the loop from the slip maximum as in
+    :func:`aft_joint_force` (same periodic start, :func:`joints.jenkins.jenkins_update`)
+    and each joint's anchors are taken after the update at ``sample``: the state a
+    time integration must start from to continue on this periodic orbit.
+
+    Parameters
+    ----------
+    slip_t : ndarray, shape (n_joints, n_time)
+        Slip samples over one period (m).
+    bank : JointBank
+    sample : int
+
+    Returns
+    -------
+    ndarray, shape (n_joints, n_sliders)
+    """
+    slip_t = np.ascontiguousarray(slip_t, dtype=float)
+    k, phi = bank.stiffness, bank.slip_limit
+    anchor, _, i_max = _aft_start(slip_t, k, phi)
+    nj, N = slip_t.shape
+    rows = np.arange(nj)
+    stop = (sample - i_max) % N              # step at which each joint reaches ``sample``
+    out = np.empty_like(anchor)
+    for step in range(N):
+        _, _, anchor = jenkins_update(slip_t[rows, (i_max + step) % N], anchor, k, phi)
+        done = stop == step
+        out[done] = anchor[done]
+    return out

@@ -17,7 +17,11 @@ Newton's method uses). Physical response harmonics follow as
 ``Q_h = D_h^{-1} (p delta_{h1} - G^T N_h)``. This module holds the settings, the
 solution type, the condensed operator (:class:`HBOperator`, shared with the
 first-harmonic balance on exact Iwan joints of :mod:`fe.hb_exact`), :func:`solve_hb`
-and the continuation over frequency lines.
+and the continuation over frequency lines. The Newton iteration is globalized
+(:mod:`fe.newton_path`): a line search on the residual norm, a fresh start by
+continuation in the load from the all-stuck solution, and the frequency step between
+lines halved when a line's corrector fails; a line that still fails raises
+:class:`fe.newton_path.SteadyStateError` (one line: where and why).
 
 SI units: rad/s, m, N.
 """
@@ -29,10 +33,11 @@ from functools import lru_cache
 import numpy as np
 
 from fe.aft import aft_joint_force
+from fe.newton_path import SteadyStateError, damped_newton, follow, natural_continuation
 from fe.reduction import JointBank, ReducedModel
 
 __all__ = ["HBSettings", "HBSolution", "HBOperator", "check_joint_stiffness", "solve_hb",
-           "natural_continuation", "continuation"]
+           "natural_continuation", "continuation", "SteadyStateError"]
 
 
 @dataclass(frozen=True)
@@ -192,9 +197,76 @@ def check_joint_stiffness(bank_K_T, model: ReducedModel) -> None:
         raise ValueError("joint bank stiffness does not match the model's K_T")
 
 
+class _Balance:
+    """Residual ``r(y) = y - lam y_lin + R N(y)`` of the condensed equations (module
+    docstring) in the real slip coefficients ``y`` (index ``(c, j)``) and its exact
+    Jacobian ``I + R dN/dy``; ``lam`` scales the load (1: the given one)."""
+
+    def __init__(self, model: ReducedModel, bank: JointBank, op: HBOperator, n_time: int):
+        self.op, self.bank, self.K_T = op, bank, model.K_T
+        self.E, self.P = _synthesis(op.h, n_time)
+        self.eye_c = np.eye(op.nc)
+        self.eye_y = np.eye(op.nc * op.nj)
+        self.lam = 1.0
+
+    def __call__(self, y):
+        op, K_T = self.op, self.K_T
+        s_t = np.ascontiguousarray((self.E @ y.reshape(op.nc, op.nj)).T)      # (nj, N)
+        F, JF = aft_joint_force(s_t, self.bank, self.P, self.E)
+        yg = (self.P @ (F - K_T[:, None] * s_t).T).reshape(-1)               # (nc*nj,)
+        res = y - self.lam * op.y_lin + op.Rr @ yg
+        # d yg / d y : per joint P (dF - K_T I) E, arranged in the (c, j) index:
+        # Jac[(c,j),(d,l)] = delta + sum_e Rr[(c,j),(e,l)] Jg[l,e,d]
+        Jg = JF - K_T[:, None, None] * self.eye_c
+        n = op.nc * op.nj
+        return res, self.eye_y + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(n, n)
+
+
+def _load_continuation(balance: _Balance, settings: HBSettings, scale: float):
+    """Steady state at the full load from the stuck-joint solution, by continuation in
+    the load factor ``lam`` (:func:`fe.newton_path.follow` in ``ln lam``): at ``lam0 =
+    phi_min / max|S_lin|`` every slider sticks, so ``lam0 y_lin`` is exact; the
+    predictor scales the last solution (secant of ``y / lam`` in ``ln lam``).
+
+    Returns (y, Newton iterations)."""
+    y_lin = balance.op.y_lin
+    lam0 = min(1.0, float(balance.bank.slip_limit.min()) / max(np.abs(y_lin).max(), 1e-300))
+    iters = [0]
+
+    def solve(p, guess):
+        balance.lam = float(np.exp(p))
+        y, it, _, _ = damped_newton(balance, guess, settings.tol, settings.max_iter,
+                                    scale * balance.lam)
+        iters[0] += it
+        return y / balance.lam
+
+    def predictor(p, hist):
+        z = hist[-1][1] if len(hist) < 2 else hist[-1][1] + (p - hist[-1][0]) / (
+            hist[-1][0] - hist[-2][0]) * (hist[-1][1] - hist[-2][1])
+        return z * np.exp(p)
+
+    try:
+        z, _ = follow(solve, [(np.log(lam0), y_lin)], 0.0, predictor,
+                      max_halvings=LOAD_HALVINGS)
+    finally:
+        balance.lam = 1.0
+    return z, iters[0]
+
+
+#: Halvings of the step of the load continuation (in ln of the load factor) before a
+#: fresh start is given up.
+LOAD_HALVINGS = 10
+
+
 def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
              settings: HBSettings = HBSettings(), guess: np.ndarray | None = None) -> HBSolution:
     """Harmonic-balance steady state at ``omega`` (rad/s) for ``Re(load e^{i w t})``.
+
+    Newton's method with the exact AFT Jacobian and a line search on the residual norm
+    (:func:`fe.newton_path.damped_newton`). Without ``guess`` it starts from the
+    stuck-joint linear solution; if that fails (deep macro-slip), the load is raised
+    from the level at which every slider sticks to the full load by continuation
+    (:func:`_load_continuation`).
 
     Parameters
     ----------
@@ -209,41 +281,36 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     Returns
     -------
     HBSolution
+
+    Raises
+    ------
+    fe.newton_path.SteadyStateError
+        One line: the frequency and the reason.
     """
     check_joint_stiffness(bank.K_T, model)
     op = HBOperator(model, load, omega, settings)
     h = op.h
-    E, P = _synthesis(h, settings.n_time)
-    nc, nj = op.nc, op.nj
-    y = op.y_lin.copy() if guess is None else _to_real(np.asarray(guess), h).reshape(-1)
-    K_T = model.K_T
-    eye_c = np.eye(nc)
-    eye_y = np.eye(nc * nj)
+    balance = _Balance(model, bank, op, settings.n_time)
     scale = max(np.abs(op.y_lin).max(), 1e-300)
-    it, upd = 0, np.inf
-    for it in range(1, settings.max_iter + 1):
-        Y = y.reshape(nc, nj)
-        s_t = np.ascontiguousarray((E @ Y).T)                    # (nj, N)
-        F, JF = aft_joint_force(s_t, bank, P, E)
-        g_t = F - K_T[:, None] * s_t
-        yg = (P @ g_t.T).reshape(-1)                              # (nc*nj,)
-        res = y - op.y_lin + op.Rr @ yg
-        # d yg / d y : per joint P (dF - K_T I) E, arranged in the (c, j) index:
-        # Jac[(c,j),(d,l)] = delta + sum_e Rr[(c,j),(e,l)] Jg[l,e,d]
-        Jg = JF - K_T[:, None, None] * eye_c
-        Jac = eye_y + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(nc * nj, nc * nj)
-        dy = np.linalg.solve(Jac, -res)
-        y = y + dy
-        upd = np.abs(dy).max() / max(np.abs(y).max(), scale * 1e-12)
-        if upd < settings.tol:
-            break
-    else:
-        raise RuntimeError(f"harmonic balance did not converge at {omega / (2 * np.pi):.4g} Hz "
-                           f"(relative update {upd:.2e})")
+    where = f"{omega / (2 * np.pi):.6g} Hz"
+    y0 = op.y_lin.copy() if guess is None else _to_real(np.asarray(guess), h).reshape(-1)
+    try:
+        y, it, upd, _ = damped_newton(balance, y0, settings.tol, settings.max_iter, scale)
+    except SteadyStateError as exc:
+        if guess is not None:
+            raise SteadyStateError(where, exc.reason) from None
+        try:
+            y, it = _load_continuation(balance, settings, scale)
+        except SteadyStateError as exc2:
+            raise SteadyStateError(where, f"{exc2.reason}, also with the load raised "
+                                          f"gradually from the stuck-joint solution") from None
+        upd = 0.0
+    nc, nj = op.nc, op.nj
+    E, P = balance.E, balance.P
     Y = y.reshape(nc, nj)
     s_t = np.ascontiguousarray((E @ Y).T)
     F, _ = aft_joint_force(s_t, bank)
-    g_t = F - K_T[:, None] * s_t
+    g_t = F - model.K_T[:, None] * s_t
     Gh = _to_complex(P @ g_t.T, h)                                 # (n_h, nj)
     S = _to_complex(Y, h)
     q = -np.einsum("hrj,hj->hr", op.XG, Gh)
@@ -251,30 +318,6 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     amp = 0.5 * (s_t.max(axis=1) - s_t.min(axis=1))
     return HBSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Gh, q=q,
                       slip_amplitude=amp, iterations=it, residual=float(upd))
-
-
-def natural_continuation(solve, omegas, progress) -> list[HBSolution]:
-    """Natural-parameter continuation with a secant predictor (see :func:`continuation`);
-    ``solve(omega, guess)`` returns an :class:`HBSolution`."""
-    sols: list[HBSolution] = []
-    for i, w in enumerate(np.asarray(omegas, dtype=float)):
-        guess = None
-        if i == 1:
-            guess = sols[-1].slip
-        elif i >= 2:
-            w1, w2 = sols[-2].omega, sols[-1].omega
-            t = (w - w2) / (w2 - w1) if w2 != w1 else 0.0
-            guess = sols[-1].slip + t * (sols[-1].slip - sols[-2].slip)
-        try:
-            sol = solve(w, guess)
-        except RuntimeError:
-            if guess is None:
-                raise
-            sol = solve(w, sols[-1].slip)
-        sols.append(sol)
-        if progress is not None:
-            progress.update(1)
-    return sols
 
 
 def continuation(model: ReducedModel, bank: JointBank, load, omegas,

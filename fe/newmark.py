@@ -94,6 +94,35 @@ class NewmarkState:
         return cls(t=t, q=np.zeros(r), v=np.zeros(r), a=np.zeros(r),
                    anchor=bank.initial_anchor(), g=np.zeros(bank.n_joints), e=0.0)
 
+    @classmethod
+    def periodic(cls, model: ReducedModel, bank: JointBank, harmonics, q_harmonics,
+                 omega: float, load, n_time: int = 256,
+                 dt: float | None = None) -> "NewmarkState":
+        """State at phase 0 (``t = 0``, excitation ``e = cos 0 = 1``) of the periodic
+        orbit ``q(t) = Re sum_h Q_h e^{i h omega t}`` (e.g. a harmonic-balance solution,
+        :attr:`fe.harmonic_balance.HBSolution.q`): ``q``, ``v`` from the harmonics
+        (``V_h = i h omega Q_h``, or with ``dt`` the trapezoidal rule's own steady-state
+        relation ``V_h = (2i/dt) tan(h omega dt/2) Q_h``), the
+        slider anchors of the periodic loop at phase 0 (:func:`fe.aft.aft_slider_state`
+        on ``n_time`` samples), ``g`` from them and ``a`` from the equation of motion
+        with the real reduced ``load``. Integration from it starts on (near) the orbit:
+        the transient is only the difference between the orbit and the integrator's own
+        steady state."""
+        from fe.aft import aft_slider_state
+
+        h = np.asarray(harmonics, dtype=float)
+        Q = np.asarray(q_harmonics, dtype=complex)                      # (n_h, r)
+        theta = 2.0 * np.pi * np.arange(int(n_time)) / int(n_time)
+        s_t = model.G @ np.real(Q.T @ np.exp(1j * np.outer(h, theta)))  # (nj, N)
+        anchor = aft_slider_state(s_t, bank, 0)
+        q = np.real(Q.sum(axis=0))
+        rate = h * omega if dt is None else (2.0 / dt) * np.tan(0.5 * h * omega * dt)
+        v = np.real((1j * rate[:, None] * Q).sum(axis=0))
+        s = model.G @ q
+        g = np.sum(bank.stiffness * (s[:, None] - anchor), axis=1) - model.K_T * s
+        f = np.asarray(load, dtype=float) - model.C @ v - model.K @ q - model.G.T @ g
+        return cls(t=0.0, q=q, v=v, a=np.linalg.solve(model.M, f), anchor=anchor, g=g, e=1.0)
+
     def copy(self) -> "NewmarkState":
         return NewmarkState(self.t, self.q.copy(), self.v.copy(), self.a.copy(),
                             self.anchor.copy(), self.g.copy(), self.e)

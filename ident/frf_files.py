@@ -1,19 +1,27 @@
 """FRF files: one FRF set (one reference, one or more response points) per file.
 
-CSV format (written and read here)::
+CSV format (written and read here; ``shared/spec/measured-data.md``, "FRF files of a
+stepped-sine series")::
 
     # quantity = receptance
+    # control = force
+    # run_order = 3
     # excitation = 2.5
     # reference = 1+Z
-    freq_hz,re_1+Z,im_1+Z,re_7+Z,im_7+Z
+    freq_hz,re_1+Z,im_1+Z,re_7+Z,im_7+Z,force
 
 * optional leading ``# key = value`` lines, keys ``quantity`` (receptance | mobility |
-  accelerance), ``excitation`` (excitation amplitude of this set, any unit proportional
-  to force, > 0) and ``reference`` (label of the drive point);
+  accelerance), ``control`` (``force``: the level held a drive amplitude; ``response``:
+  it held the drive-point response amplitude), ``run_order`` (integer >= 1, when the
+  level was measured), ``excitation`` (> 0: the level held: the drive amplitude, force or
+  voltage, under force control; the drive-point response amplitude, in the unit of the
+  FRF's response, under response control) and ``reference`` (label of the drive point);
 * then one header line: ``freq_hz`` (Hz, strictly increasing, > 0; any spacing) and,
   for every response point ``P``, the pair ``re_P`` / ``im_P`` (real and imaginary part
   of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
-  a comma; points keep the order of their ``re_`` columns. No other columns.
+  a comma; points keep the order of their ``re_`` columns. One optional ``force``
+  column: the measured force amplitude at the reference on that line (N, > 0). No
+  other columns.
 
 Errors are :class:`ident.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
 column name), like the measured-data reader.
@@ -22,8 +30,10 @@ UFF 58 (universal file, via pyuff): every data set 58 with function type 4 (FRF)
 response point; all must share the reference node/direction and the abscissa.
 Point label = ``"<node><+|-><X|Y|Z|RX|RY|RZ>"`` (``"<node>"`` for a scalar direction).
 Quantity from the ordinate specific data type (8 displacement -> receptance,
-11 velocity -> mobility, 12 acceleration -> accelerance). The excitation level is
-read from an ID line holding ``excitation=<value>`` (the writer puts it in ID line 4).
+11 velocity -> mobility, 12 acceleration -> accelerance). The keys ``excitation``,
+``control``, ``run_order`` and ``reference`` may stand in the ID lines of the first data
+set as ``key=value`` (the writer puts them in ID line 4); ``reference`` there overrides
+the label built from the reference node. A universal file has no force column.
 """
 from __future__ import annotations
 
@@ -37,6 +47,8 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError
+from ident.frf_header import (CONTROLS, HEADER_KEYS, header_values, id_line_values,
+                              parse_control, parse_excitation, parse_run_order)
 from ident.poles import QUANTITIES
 
 _UFF_ORDINATE = {8: "receptance", 11: "mobility", 12: "accelerance"}
@@ -45,7 +57,6 @@ _DIRS = {1: "+X", 2: "+Y", 3: "+Z", 4: "+RX", 5: "+RY", 6: "+RZ",
          -1: "-X", -2: "-Y", -3: "-Z", -4: "-RX", -5: "-RY", -6: "-RZ"}
 _DIR_CODE = {v: k for k, v in _DIRS.items()}
 _LABEL = re.compile(r"^(\d+)([+-]R?[XYZ])?$")
-_EXCITATION = re.compile(r"excitation\s*=\s*([-+0-9.eE]+)")
 
 
 @dataclass
@@ -58,9 +69,13 @@ class FRFSet:
     frf : (n, n_points) complex FRFs (SI: m/N, m/s/N or m/s^2/N).
     points : list of response-point labels (n_points).
     quantity : "receptance", "mobility", "accelerance" or None if unknown.
-    excitation : excitation amplitude of this set (unit proportional to force) or None.
+    excitation : the level this set held (module doc: drive amplitude under force
+        control, drive-point response amplitude under response control) or None.
     reference : drive-point label or None.
     source : file name ("" if built in memory).
+    control : "force", "response" or None (not stated).
+    run_order : chronological order of the level (int >= 1) or None.
+    force : (n,) measured force amplitude at the reference per line (N) or None.
     """
 
     freq_hz: np.ndarray
@@ -70,6 +85,9 @@ class FRFSet:
     excitation: float | None = None
     reference: str | None = None
     source: str = ""
+    control: str | None = None
+    run_order: int | None = None
+    force: np.ndarray | None = None
 
     def __post_init__(self):
         self.freq_hz = np.asarray(self.freq_hz, float)
@@ -83,6 +101,13 @@ class FRFSet:
         if self.quantity is not None and self.quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, "
                              f"got {self.quantity!r}")
+        if self.control is not None and self.control not in CONTROLS:
+            raise ValueError(f"control must be force or response, got {self.control!r}")
+        if self.force is not None:
+            self.force = np.asarray(self.force, float)
+            if self.force.shape != self.freq_hz.shape:
+                raise ValueError(f"force has shape {self.force.shape}, one value per "
+                                 f"frequency ({self.freq_hz.size}) is needed")
 
 
 def _fail(source, line, column, message):
@@ -107,8 +132,8 @@ def read_frf_csv(path) -> FRFSet:
                 if "=" not in s:
                     _fail(src, lineno, 1, "comment line must read '# key = value'")
                 key, value = (t.strip() for t in s[1:].split("=", 1))
-                if key not in ("quantity", "excitation", "reference"):
-                    _fail(src, lineno, key, "unknown key (known: quantity, excitation, reference)")
+                if key not in HEADER_KEYS:
+                    _fail(src, lineno, key, "unknown key (known: " + ", ".join(HEADER_KEYS) + ")")
                 meta[key] = (lineno, value)
                 continue
             fields = [t.strip() for t in s.split(",")]
@@ -120,11 +145,17 @@ def read_frf_csv(path) -> FRFSet:
         _fail(src, 1, 1, "empty file: expected a header line")
     if header[0] != "freq_hz":
         _fail(src, header_line, header[0] or 1, "first column must be 'freq_hz'")
-    points, re_col, im_col = [], {}, {}
+    points, re_col, im_col, force_col = [], {}, {}, None
     for j, name in enumerate(header[1:], start=1):
+        if name == "force":
+            if force_col is not None:
+                _fail(src, header_line, name, "duplicate column name")
+            force_col = j
+            continue
         part, _, label = name.partition("_")
         if part not in ("re", "im") or not label:
-            _fail(src, header_line, name, "unknown column: expected re_<point> or im_<point>")
+            _fail(src, header_line, name,
+                  "unknown column: expected re_<point>, im_<point> or force")
         target = re_col if part == "re" else im_col
         if label in target:
             _fail(src, header_line, name, "duplicate column name")
@@ -163,6 +194,12 @@ def read_frf_csv(path) -> FRFSet:
     if bad.size:
         _fail(src, lines[bad[0] + 1], "freq_hz", "frequencies must be strictly increasing")
     frf = values[:, [re_col[p] for p in points]] + 1j * values[:, [im_col[p] for p in points]]
+    force = None
+    if force_col is not None:
+        force = values[:, force_col]
+        bad = np.flatnonzero(force <= 0)
+        if bad.size:
+            _fail(src, lines[bad[0]], "force", f"force must be > 0 N, got {force[bad[0]]:g}")
 
     quantity = excitation = reference = None
     if "quantity" in meta:
@@ -171,15 +208,19 @@ def read_frf_csv(path) -> FRFSet:
             _fail(src, ln, "quantity", f"must be one of {', '.join(QUANTITIES)}, got {quantity!r}")
     if "excitation" in meta:
         ln, text = meta["excitation"]
-        try:
-            excitation = float(text)
-        except ValueError:
-            _fail(src, ln, "excitation", f"not a number: {text!r}")
-        if not (math.isfinite(excitation) and excitation > 0):
-            _fail(src, ln, "excitation", f"excitation must be a finite number > 0, got {text!r}")
+        excitation = parse_excitation(text, f"{src}:{ln}:excitation")
     if "reference" in meta:
         reference = meta["reference"][1]
-    return FRFSet(freq, frf, points, quantity, excitation, reference, src)
+    control = run_order = None
+    if "control" in meta:
+        ln, text = meta["control"]
+        control = parse_control(text, f"{src}:{ln}:control")
+    if "run_order" in meta:
+        ln, text = meta["run_order"]
+        run_order = parse_run_order(text, f"{src}:{ln}:run_order")
+    return FRFSet(freq, frf, points, quantity, excitation, reference, src, control,
+                  run_order, force)
+
 
 
 def write_frf_csv(path, frfset: FRFSet) -> None:
@@ -187,18 +228,17 @@ def write_frf_csv(path, frfset: FRFSet) -> None:
     for p in frfset.points:
         if "," in p or not p:
             raise ValueError(f"point label {p!r} cannot be used as a CSV column name")
-    lines = []
-    if frfset.quantity:
-        lines.append(f"# quantity = {frfset.quantity}")
-    if frfset.excitation is not None:
-        lines.append(f"# excitation = {float(frfset.excitation)!r}")
-    if frfset.reference:
-        lines.append(f"# reference = {frfset.reference}")
-    lines.append(",".join(["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]))
-    table = np.empty((frfset.freq_hz.size, 1 + 2 * len(frfset.points)))
+    lines = [f"# {key} = {text}" for key, text in header_values(frfset)]
+    names = ["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]
+    n_pts = len(frfset.points)
+    table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + (frfset.force is not None)))
     table[:, 0] = frfset.freq_hz
-    table[:, 1::2] = frfset.frf.real
-    table[:, 2::2] = frfset.frf.imag
+    table[:, 1:2 * n_pts + 1:2] = frfset.frf.real
+    table[:, 2:2 * n_pts + 1:2] = frfset.frf.imag
+    if frfset.force is not None:
+        names.append("force")
+        table[:, -1] = frfset.force
+    lines.append(",".join(names))
     lines.extend(",".join(repr(float(v)) for v in row) for row in table)
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
@@ -250,23 +290,14 @@ def read_frf_uff(path) -> FRFSet:
         raise InputError(f"{src}: duplicate response point in FRFs ({', '.join(points)})")
     codes = {int(s.get("ordinate_spec_data_type", 0)) for s in sets}
     quantity = _UFF_ORDINATE.get(codes.pop()) if len(codes) == 1 else None
-    excitation = None
-    for key in ("id1", "id2", "id3", "id4", "id5"):
-        m = _EXCITATION.search(str(sets[0].get(key, "")))
-        if m:
-            try:
-                excitation = float(m.group(1))
-            except ValueError:
-                raise InputError(f"{src}: {key}: bad excitation value {m.group(1)!r}") from None
-            if not (math.isfinite(excitation) and excitation > 0):
-                raise InputError(f"{src}: {key}: excitation must be > 0, got {m.group(1)}")
-            break
+    keys = id_line_values(sets[0], src)
     if np.any(np.diff(x) <= 0):
         raise InputError(f"{src}: frequencies must be strictly increasing")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(frf))):
         raise InputError(f"{src}: non-finite frequency or FRF value")
-    ref = refs.pop()
-    return FRFSet(x, frf, points, quantity, excitation, _label(*ref), src)
+    reference = keys.get("reference") or _label(*refs.pop())
+    return FRFSet(x, frf, points, quantity, keys.get("excitation"), reference, src,
+                  keys.get("control"), keys.get("run_order"))
 
 
 def write_frf_uff(path, frfset: FRFSet) -> None:
@@ -284,7 +315,14 @@ def write_frf_uff(path, frfset: FRFSet) -> None:
     even = bool(np.allclose(df, df[0], rtol=1e-9, atol=0)) if f.size > 1 else True
     ref_node, ref_dir = _node_dir(frfset.reference or "1", 1)
     code = _UFF_ORDINATE_CODE.get(frfset.quantity, 0)
-    id4 = f"excitation={float(frfset.excitation)!r}" if frfset.excitation is not None else "NONE"
+    id4 = " ".join(f"{key}={text}" for key, text in header_values(frfset)
+                   if key != "quantity" and (key != "reference"
+                                             or _LABEL.match(frfset.reference) is None))
+    id4 = id4 or "NONE"
+    if len(id4) > 80:
+        raise ValueError(f"UFF ID line too long for the keys ({id4!r}); use CSV")
+    if frfset.force is not None:
+        raise ValueError("a universal file has no force column; write CSV to keep it")
     dsets = []
     for j, label in enumerate(frfset.points):
         node, direction = _node_dir(label, j + 1)

@@ -17,7 +17,9 @@ Pipeline of :func:`identify` (single reference, one or more response points):
    and above the band when an F-test says they explain the misfit. Poles that leave
    the band, whose removal
    does not raise the weighted misfit significantly (F-test) or whose fitted peak is
-   below 1 % of the local FRF level are dropped and the rest refitted; then the
+   below 1 % of the local FRF level are dropped and the rest refitted (a pole just
+   outside the band is kept when a peak of the mode indicator inside the band lies
+   within its half-power half-width); then the
    weights are replaced by those of a noise model fitted to the residuals
    (:func:`ident.refine.noise_weights`) and the refinement repeated. The returned shape
    is the residue vector ``A_r`` (receptance, complex).
@@ -45,6 +47,7 @@ from scipy.signal import find_peaks
 from ident.lscf import (LINK_MAC, STABLE_FREQ, ZETA_MAX, StabilizationDiagram,
                         chain_representatives, lscf_poles, stabilization)
 from ident.lsfd import lsfd
+from ident.pole_uncertainty import modal_std, pole_covariance
 from ident.poles import mac, pole_to_modal, to_receptance
 from ident.refine import noise_weights, refine_selected
 
@@ -68,6 +71,9 @@ class IdentifiedMode:
         ``lambda = -zeta omega_n + i omega_n sqrt(1 - zeta^2)``, rad/s.
     stability : float
         Fraction of model orders at which the pole was stable (1 if not from LSCF).
+    omega2_std, zeta_std : float
+        Standard uncertainties of ``omega2`` (rad^2/s^2) and ``zeta`` from the
+        refinement's least squares (:mod:`ident.pole_uncertainty`); NaN if unknown.
     """
 
     frequency_hz: float
@@ -76,13 +82,22 @@ class IdentifiedMode:
     shape: np.ndarray
     pole: complex = 0j
     stability: float = 1.0
+    omega2_std: float = float("nan")
+    zeta_std: float = float("nan")
 
 
 @dataclass
 class Identification:
+    """Modes (sorted by frequency), the stabilization diagram, the relative rms misfit
+    of the final model over the band, the band used (Hz) and the lag-1 correlation of
+    the weighted residuals along frequency (near 0 for noise, near 1 for a model that
+    cannot follow the data)."""
+
     modes: list
     diagram: StabilizationDiagram
-    fit_error: float  # relative rms misfit of the final model over the band
+    fit_error: float
+    band_hz: tuple = (float("nan"), float("nan"))
+    residual_correlation: float = float("nan")
 
 
 def _prepare(freq_hz, frf, band):
@@ -199,9 +214,17 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
         return refine_selected(f, Hn, p, Wt, band_w)
 
     def physical(p):
-        """Refined poles still in the band with damping in (1e-7, ZETA_MAX)."""
+        """Refined poles in the band with damping in (1e-7, ZETA_MAX), or just outside it
+        while a peak of the mode indicator inside the band lies within their half-power
+        half-width (a resonance the band cuts: a force-controlled FRF of a softening
+        joint pulls the fitted pole below its peak); not a neighbour's tail."""
         wn_p, z_p = pole_to_modal(p)
-        return (p.imag >= w[0]) & (p.imag <= w[-1]) & (z_p > 1e-7) & (z_p < ZETA_MAX)
+        inside = (p.imag >= w[0]) & (p.imag <= w[-1])
+        if peaks.size:
+            reach = -p.real + 2 * np.diff(w).max()
+            inside |= np.any(np.abs(w[peaks][None, :] - p.imag[:, None]) < reach[:, None],
+                             axis=1)
+        return inside & (z_p > 1e-7) & (z_p < ZETA_MAX)
 
     def significant(p, ps):
         """Keep mode r when dropping it (poles fixed, residues refitted) raises the
@@ -275,10 +298,15 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
             break
         Wt = noise_weights(f, Hn, np.concatenate([poles, pseudo]))
     scale = np.sqrt(np.mean(np.abs(H) ** 2, axis=0))
+    corr = float("nan")
     if poles.size:
-        residues, fitted, _ = lsfd(f, Hn, np.concatenate([poles, pseudo]), Wt)
+        allp = np.concatenate([poles, pseudo])
+        residues, fitted, wres = lsfd(f, Hn, allp, Wt)
         residues = residues[:, :poles.size]
         fit_error = float(np.linalg.norm(Hn - fitted) / np.linalg.norm(Hn))
+        s_w2, s_z = modal_std(poles, pole_covariance(f, Hn, allp, Wt))
+        corr = float(np.real(np.sum(np.conj(wres[:-1]) * wres[1:]))
+                     / max(np.sum(np.abs(wres) ** 2), 1e-300))
     else:
         residues, fit_error = np.zeros((H.shape[1], 0), complex), float("nan")
     idx = np.argsort(np.abs(poles))
@@ -287,9 +315,14 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
         wn, z = pole_to_modal(poles[r])
         modes.append(IdentifiedMode(frequency_hz=float(wn / (2 * np.pi)), omega2=float(wn**2),
                                     zeta=float(z), shape=residues[:, r] * scale,
-                                    pole=complex(poles[r]), stability=float(stab[r])))
+                                    pole=complex(poles[r]), stability=float(stab[r]),
+                                    omega2_std=float(s_w2[r]), zeta_std=float(s_z[r])))
     diagram.selected_hz = np.array([m.frequency_hz for m in modes])
-    return Identification(modes, diagram, fit_error)
+    if n_modes is not None and len(modes) < int(n_modes):
+        raise ValueError(f"{n_modes} mode(s) requested, {len(modes)} left after the "
+                         f"refinement in {lo:g}-{hi:g} Hz (poles ran out of the band or "
+                         "to zero damping)")
+    return Identification(modes, diagram, fit_error, (float(lo), float(hi)), corr)
 
 
 def identify_modes(freq_hz, frf, band=None, n_modes=None, **options) -> list[IdentifiedMode]:

@@ -1,7 +1,10 @@
 """The mode of a stepped-sine campaign identified level by level.
 
 Every level's FRF at one response point goes through the LSCF identification
-(:func:`ident.identify.identify_modes`); the mode nearest a target frequency is kept and
+(:func:`ident.identify.identify`), the levels agree on the number of modes in the band
+(:func:`ident.tracking.agree_on_modes`: a level the nonlinearity distorts into two
+poles is identified again with the count of the other levels), the mode nearest a
+target frequency is kept and
 the campaign's amplitudes (joint slips, response) are read "at resonance", i.e.
 interpolated by a cubic spline over the lines at the identified frequency. The modal
 filter (:mod:`ident.modal_filter`) is the identification-free check of the same levels.
@@ -50,10 +53,11 @@ def identify_levels(freq_hz, receptance, slip_amplitude, force, band, target_hz,
     target_hz : float
     weights : (n_joints,) ``q_m = w_m (g_m . phi)^2`` for the effective amplitude.
     options : dict, optional
-        Keyword options of :func:`ident.identify.identify_modes`.
+        Keyword options of :func:`ident.identify.identify`.
     progress : tqdm bar or None (one tick per level).
     """
-    from ident.identify import identify_modes
+    from ident.identify import Identification, identify
+    from ident.tracking import agree_on_modes
 
     f = np.asarray(freq_hz, dtype=float)
     sel = (f >= band[0]) & (f <= band[1])
@@ -61,17 +65,27 @@ def identify_levels(freq_hz, receptance, slip_amplitude, force, band, target_hz,
     nj = slip_amplitude.shape[2]
     f_id, om2, ze, resp = (np.full(L, np.nan) for _ in range(4))
     slip = np.full((L, nj), np.nan)
-    for lv in range(L):
+
+    def fit(lv, n_modes=None):
         try:
-            modes = identify_modes(f[sel], receptance[lv, sel], band=band, **(options or {}))
+            return identify(f[sel], receptance[lv, sel], band=band, n_modes=n_modes,
+                            **(options or {}))
         except ValueError:
-            modes = []
+            return Identification([], None, float("nan"))
+
+    results = []
+    for lv in range(L):
+        results.append(fit(lv))
+        if progress is not None:
+            progress.update(1)
+    if not (options or {}).get("n_modes"):
+        results = agree_on_modes(results, fit)[0]
+    for lv in range(L):
+        modes = results[lv].modes
         if modes:
             m = min(modes, key=lambda m: abs(m.frequency_hz - target_hz))
             f_id[lv], om2[lv], ze[lv] = m.frequency_hz, m.omega2, m.zeta
             slip[lv] = spline_at(f[sel], slip_amplitude[lv, sel], m.frequency_hz)
             resp[lv] = spline_at(f[sel], np.abs(receptance[lv, sel]), m.frequency_hz) * force[lv]
-        if progress is not None:
-            progress.update(1)
     w = np.asarray(weights, dtype=float)
     return LevelIdentification(f_id, om2, ze, slip, slip @ w / w.sum(), resp)

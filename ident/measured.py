@@ -21,9 +21,10 @@ amplitude, so ``response_amplitude`` is required and must increase with ``level`
 ``excitation`` (force needed at resonance) need not increase. Under force control the
 excitation must increase with ``level``.
 
-Warnings (kept in :attr:`MeasuredData.warnings`): a ``zeta`` median above 0.2 (percent?)
-and, per mode, ratios of the held amplitude between successive levels that differ from
-their median by more than 5 %.
+Warnings (kept in :attr:`MeasuredData.warnings`): a ``zeta`` median above 0.2 (percent?),
+per mode, ratios of the held amplitude between successive levels that differ from
+their median by more than 5 %, and every non-empty ``x_warning`` annotation (the
+identification's warnings, :func:`ident.modal_data.annotation_warnings`).
 
 ``python -m ident.measured FILE`` validates a file: a summary and the warnings, or one
 error line on stderr with exit status 2.
@@ -38,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError
-from ident.modal_data import MeasuredData
+from ident.modal_data import MeasuredData, annotation_warnings
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
 OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order", "omega2_std", "zeta_std",
@@ -235,10 +236,14 @@ def read_measured(path) -> MeasuredData:
             except ValueError:
                 extra[name] = np.array(texts, dtype=str)
 
-    return MeasuredData(level=level, excitation=excitation, omega2=omega2, zeta=zeta,
+    if "x_warning" in extra:
+        extra["x_warning"] = np.array([f[col["x_warning"]] for _, f in rows], dtype=str)
+    data = MeasuredData(level=level, excitation=excitation, omega2=omega2, zeta=zeta,
                         mode=mode, run_order=run_order, response_amplitude=response,
                         omega2_std=omega2_std, zeta_std=zeta_std, control=control,
                         extra=extra, warnings=warnings, line=lines, source=source)
+    data.warnings.extend(annotation_warnings(data))
+    return data
 
 
 def write_measured(path, data: MeasuredData) -> None:

@@ -126,3 +126,16 @@ class MeasuredData:
         if idx.size == 0:
             raise ValueError(f"mode {m} not in data (modes: {', '.join(map(str, self.modes))})")
         return self.take(idx[np.argsort(self.level[idx], kind="stable")])
+
+
+def annotation_warnings(data: MeasuredData) -> list[str]:
+    """The ``x_warning`` annotations of a table as warnings, one per non-empty entry:
+    ``"<source>: level L, mode M: <text>"`` (identification warnings written by
+    :func:`ident.series.series_table`, kept through a CSV round trip)."""
+    text = data.extra.get("x_warning")
+    if text is None:
+        return []
+    src = data.source or "data"
+    return [f"{src}: level {lv}, mode {m}: {t}"
+            for lv, m, t in zip(data.level, data.mode, np.asarray(text, dtype=str))
+            if t.strip() and t.strip().lower() != "nan"]

@@ -43,3 +43,11 @@ def to_receptance(freq_hz, frf, quantity: str) -> np.ndarray:
     if quantity == "accelerance":
         return frf / (-(w.reshape(shape)) ** 2)
     return np.asarray(frf)
+
+
+def modal_receptance(pole, residues, freq_hz) -> np.ndarray:
+    """One mode's receptance ``A/(i w - lambda) + conj(A)/(i w - conj(lambda))`` at
+    ``freq_hz`` (Hz) for residues ``A`` (n_points,): (n_freq, n_points), m/N."""
+    iw = 2j * np.pi * np.atleast_1d(np.asarray(freq_hz, float))[:, None]
+    a = np.atleast_1d(np.asarray(residues, complex))[None, :]
+    return a / (iw - pole) + np.conj(a) / (iw - np.conj(pole))

@@ -1,15 +1,76 @@
-"""One mode followed across excitation levels: matching identified modes of successive
-levels (frequency and MAC) and the measured-data table built from them."""
+"""One mode followed across excitation levels: levels agreeing on the number of modes,
+matching identified modes of successive levels (frequency and MAC), and the
+measured-data table built from them."""
 from __future__ import annotations
 
 import numpy as np
 
 from ident.identify import IdentifiedMode
+from ident.lscf import LINK_MAC
 from ident.measured import MeasuredData
 from ident.poles import mac
 
 MATCH_FREQ = 0.05
 MATCH_MAC = 0.8
+
+
+def one_resonance(modes) -> bool:
+    """True when two modes lie closer than the larger half-power half-width
+    ``zeta f_n`` and (several points) their shapes agree (MAC >= 0.9): two poles
+    fitted to one resonance, which no level-to-level tracking can separate."""
+    for a in range(len(modes)):
+        for b in range(a + 1, len(modes)):
+            ma, mb = modes[a], modes[b]
+            half = max(ma.zeta * ma.frequency_hz, mb.zeta * mb.frequency_hz)
+            if abs(ma.frequency_hz - mb.frequency_hz) >= half:
+                continue
+            if np.size(ma.shape) < 2 or mac(ma.shape, mb.shape)[0, 0] >= LINK_MAC:
+                return True
+    return False
+
+
+def agree_on_modes(results, refit):
+    """Make the levels of a series agree on the number of modes in the band.
+
+    A level whose automatic selection put two poles on one resonance
+    (:func:`one_resonance`) is identified again with one mode fewer; then every level
+    with more modes than the most common count (the smaller on a tie; typically a level
+    with little signal, or a force-controlled FRF that a nonlinear joint distorts) is
+    identified again with that count. Levels with fewer modes are kept (a mode may
+    leave the band).
+
+    Parameters
+    ----------
+    results : list of :class:`ident.identify.Identification`, one per level.
+    refit : callable ``(k, n_modes) -> Identification`` identifying level k again.
+
+    Returns
+    -------
+    (results, notes): the new list and, per level, what was done (list of str).
+    """
+    results = list(results)
+    notes = [[] for _ in results]
+
+    def found(res):
+        return ", ".join(f"{m.frequency_hz:.6g}" for m in res.modes)
+
+    for k in range(len(results)):
+        while len(results[k].modes) > 1 and one_resonance(results[k].modes):
+            was = found(results[k])
+            results[k] = refit(k, len(results[k].modes) - 1)
+            notes[k].append(f"two poles within one half-power width ({was} Hz) are one "
+                            f"resonance: identified with {len(results[k].modes)}")
+    counts = np.array([len(r.modes) for r in results])
+    if np.any(counts > 0):
+        values, freq = np.unique(counts[counts > 0], return_counts=True)
+        common = int(values[np.argmax(freq)])
+        agree = int(np.sum(counts == common))
+        for k in np.flatnonzero(counts > common):
+            was = found(results[k])
+            results[k] = refit(int(k), common)
+            notes[k].append(f"automatic selection found {counts[k]} modes ({was} Hz); "
+                            f"identified with {common}, as at {agree} of {len(results)} levels")
+    return results, notes
 
 
 def match_modes(previous: list, current: list) -> list:
@@ -42,6 +103,59 @@ def match_modes(previous: list, current: list) -> list:
     return out
 
 
+def track_modes(held, results):
+    """Follow modes from level to level: levels by increasing held amplitude, labels.
+
+    Parameters
+    ----------
+    held : (L,) the amplitude each FRF set held (distinct, > 0): the excitation under
+        force control, the response amplitude under response control.
+    results : list of L lists of IdentifiedMode.
+
+    Modes are labelled 1, 2, ... at the lowest level (by frequency) and followed to the
+    next level by :func:`match_modes` against the latest mode of every label; a mode
+    without a match gets a new label.
+
+    Returns
+    -------
+    order : (L,) indices of ``results`` by increasing ``held`` (level = position + 1).
+    rows : list of (k, i, label, mac) in level order, ``results[k][i]`` being the mode;
+        ``mac`` with the same label's previous mode (NaN at its first level or with one
+        response point).
+    """
+    held = np.asarray(held, float)
+    L = held.size
+    if len(results) != L:
+        raise ValueError("one result per excitation level is needed")
+    if np.any(~np.isfinite(held) | (held <= 0)):
+        raise ValueError("excitation levels must be finite and > 0")
+    order = np.argsort(held, kind="stable")
+    if np.any(np.diff(held[order]) <= 0):
+        raise ValueError("two FRF sets have the same held level: "
+                         + ", ".join(f"{e:g}" for e in held[order]))
+    rows = []
+    last: dict[int, IdentifiedMode] = {}   # label -> latest mode
+    next_label = 1
+    for k in order:
+        idx = sorted(range(len(results[k])), key=lambda i: results[k][i].frequency_hz)
+        modes = [results[k][i] for i in idx]
+        labels = list(last)
+        match = match_modes([last[lab] for lab in labels], modes)
+        for i, mode, j in zip(idx, modes, match):
+            if j >= 0:
+                lab = labels[j]
+                prev = last[lab]
+                m = (float(mac(prev.shape, mode.shape)[0, 0])
+                     if np.size(mode.shape) > 1 and np.size(prev.shape) == np.size(mode.shape)
+                     else float("nan"))
+            else:
+                lab, m = next_label, float("nan")
+                next_label += 1
+            rows.append((int(k), i, lab, m))
+            last[lab] = mode
+    return order, rows
+
+
 def modal_data_from_levels(excitation, results, run_order=None, sources=None):
     """Measured-data table (``shared/spec/measured-data.md``) from identified levels.
 
@@ -52,54 +166,30 @@ def modal_data_from_levels(excitation, results, run_order=None, sources=None):
     run_order : (L,) chronological order (default 1..L in the given order).
     sources : list of L file names for the ``x_source`` annotation.
 
-    Levels are numbered by increasing excitation; modes are labelled 1, 2, ... at the
-    lowest level (by frequency) and followed to the next level by :func:`match_modes`;
-    a mode without a match gets a new label. Annotations: ``x_frequency_hz``,
-    ``x_stability`` and ``x_mac`` (MAC with the same mode one level below; NaN at its
-    first level or with one response point).
+    Levels are numbered by increasing excitation and modes followed by
+    :func:`track_modes`. Annotations: ``x_frequency_hz``, ``x_stability`` and ``x_mac``
+    (MAC with the same mode one level below; NaN at its first level or with one
+    response point). Series with response control, uncertainties and fit warnings:
+    :func:`ident.series.series_table`.
 
     Returns
     -------
     ident.measured.MeasuredData
     """
     excitation = np.asarray(excitation, float)
+    order, rows = track_modes(excitation, results)
     L = excitation.size
-    if len(results) != L:
-        raise ValueError("one result per excitation level is needed")
-    if np.any(~np.isfinite(excitation) | (excitation <= 0)):
-        raise ValueError("excitation levels must be finite and > 0")
-    sort = np.argsort(excitation, kind="stable")
-    if np.any(np.diff(excitation[sort]) <= 0):
-        raise ValueError("two FRF sets have the same excitation level: "
-                         + ", ".join(f"{e:g}" for e in excitation[sort]))
     run_order = np.arange(1, L + 1) if run_order is None else np.asarray(run_order, int)
     sources = [""] * L if sources is None else list(sources)
-    rows = []
-    last: dict[int, IdentifiedMode] = {}   # label -> latest mode
-    next_label = 1
-    for level, k in enumerate(sort, start=1):
-        modes = sorted(results[k], key=lambda m: m.frequency_hz)
-        labels = list(last)
-        match = match_modes([last[lab] for lab in labels], modes)
-        for mode, j in zip(modes, match):
-            if j >= 0:
-                lab = labels[j]
-                prev = last[lab]
-                m = (float(mac(prev.shape, mode.shape)[0, 0])
-                     if np.size(mode.shape) > 1 and np.size(prev.shape) == np.size(mode.shape)
-                     else float("nan"))
-            else:
-                lab, m = next_label, float("nan")
-                next_label += 1
-            rows.append((level, excitation[k], mode.omega2, mode.zeta, lab, run_order[k],
-                         mode.frequency_hz, mode.stability, m, sources[k]))
-            last[lab] = mode
     if not rows:
         raise ValueError("no mode identified at any level")
-    cols = list(zip(*rows))
-    return MeasuredData(level=cols[0], excitation=cols[1], omega2=cols[2], zeta=cols[3],
-                        mode=cols[4], run_order=cols[5],
-                        extra={"x_frequency_hz": np.array(cols[6], float),
-                               "x_stability": np.array(cols[7], float),
-                               "x_mac": np.array(cols[8], float),
-                               "x_source": np.array(cols[9], dtype=str)})
+    level_of = {int(k): n + 1 for n, k in enumerate(order)}
+    modes = [results[k][i] for k, i, _, _ in rows]
+    ks = [k for k, _, _, _ in rows]
+    return MeasuredData(level=[level_of[k] for k in ks], excitation=excitation[ks],
+                        omega2=[m.omega2 for m in modes], zeta=[m.zeta for m in modes],
+                        mode=[lab for _, _, lab, _ in rows], run_order=run_order[ks],
+                        extra={"x_frequency_hz": np.array([m.frequency_hz for m in modes]),
+                               "x_stability": np.array([m.stability for m in modes]),
+                               "x_mac": np.array([r[3] for r in rows], float),
+                               "x_source": np.array([sources[k] for k in ks], dtype=str)})

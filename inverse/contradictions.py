@@ -96,7 +96,8 @@ def _pct(x: float) -> str:
 
 
 def _frequency_rise(d, sig: NoiseLevels) -> Contradiction | None:
-    """Largest significant rise of omega^2 between two levels while zeta grew."""
+    """A significant rise of omega^2 between two levels while zeta grew: from the lowest
+    to the top level when that pair shows it, else the pair of largest z-score."""
     w, z = np.asarray(d.omega2, float), np.asarray(d.zeta, float)
     i, j = np.triu_indices(w.size, 1)
     s_w = np.hypot(sig.omega2[i], sig.omega2[j])
@@ -105,7 +106,9 @@ def _frequency_rise(d, sig: NoiseLevels) -> Contradiction | None:
     ok = ((z[j] - z[i]) / s_z > Z_STATE) & (z_rise > Z_STATE)
     if not ok.any():
         return None
-    k = np.flatnonzero(ok)[np.argmax(z_rise[ok])]
+    # the whole series (lowest -> top level) when it shows the rise, else the strongest pair
+    whole = np.flatnonzero(ok & (i == 0) & (j == w.size - 1))
+    k = whole[0] if whole.size else np.flatnonzero(ok)[np.argmax(z_rise[ok])]
     a, b = int(i[k]), int(j[k])
     f_a, f_b = math.sqrt(w[a]) / (2 * math.pi), math.sqrt(w[b]) / (2 * math.pi)
     growth = z[b] / z[a]

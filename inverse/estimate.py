@@ -6,6 +6,14 @@ every level (eq. 43, 46; :mod:`inverse.level_predictions`) and, given an FE mode
 computes B~ and R~ (eq. 36, 37; :mod:`inverse.fe_reference`). The modal relations
 (eq. 1, 2 and the factor 2 of eq. 45) are in :mod:`inverse.iwan_modal`. Differences
 <= 0 cannot be logged: they are excluded and reported in ``data_warnings``.
+What the series shows that no Iwan joint can do (frequency rising while the damping
+grows, a loss of omega^2 below the least the micro-slip tie allows, chi outside
+(-1, 0)) is stated in ``contradictions`` (:mod:`inverse.contradictions`).
+
+Abscissa: the level's excitation, as in the paper (joint amplitude proportional to
+the excitation), or, for a response-controlled series (``control = response``), the
+response amplitude each level held, ``r = A / A_ref``: the mode's amplitude, and with it
+every joint's slip, is then known rather than assumed proportional to the force.
 
 Measured damping differences (from eq. 2):
 
@@ -23,6 +31,7 @@ import re
 import numpy as np
 
 from ident.errors import InputError
+from inverse.contradictions import iwan_contradictions
 from inverse.estimate_result import Estimate
 from inverse.fe_reference import fe_reference
 from inverse.iwan_modal import EQ45_FACTOR, delta_c_from_zeta, kappa1_per_R, kappa_ratio, r_tilde
@@ -142,9 +151,13 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
     if len(fit) < 3:
         raise InputError(f"--fit-levels: need at least 3 levels (2 differences), got {len(fit)}")
 
-    # abscissa: excitation, or amplitude
+    # abscissa: what each level held (excitation; the response amplitude under response
+    # control, where it is the level's abscissa), or a supplied/measured amplitude
     abscissa = "excitation"
     amp = d.excitation
+    if d.response_controlled:
+        amp = d.held_amplitude
+        abscissa = "response_amplitude (held: control = response)"
     if method == "amplitude":
         if amplitude is not None:
             amp = np.asarray(amplitude, dtype=float).ravel()
@@ -153,7 +166,8 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
             abscissa = "amplitude (supplied)"
         elif d.response_amplitude is not None:
             amp = d.response_amplitude
-            abscissa = "response_amplitude"
+            abscissa = ("response_amplitude (held: control = response)"
+                        if d.response_controlled else "response_amplitude")
         else:
             raise InputError(f"method 'amplitude' needs a response_amplitude column in "
                              f"{d.source or 'the data'} (or amplitudes from a simulation)")
@@ -218,8 +232,6 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
     if fitres.p <= 0:
         raise InputError(f"damping growth does not increase with {abscissa} (chi+1 = "
                          f"{fitres.p:.3g} <= 0): not an Iwan micro-slip joint")
-    if not -1.0 < fitres.chi < 0.0:
-        warnings.append(f"fitted chi = {fitres.chi:.4g} is outside the Iwan range (-1, 0)")
     if fitres.dof == 0:
         warnings.append("2 fit points: no residual degrees of freedom, no intervals")
 
@@ -277,6 +289,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
             R_iv = (math.nan, math.nan)
 
     kappa = "paper" if method == "paper" else "exact"  # the kappa2 of kappa2/|kappa1|
+    contradictions = iwan_contradictions(d, chi=fitres.chi)
     return Estimate(
         method=method, mode=mode, fit_levels=fit, reference_level=int(levels[ref]),
         reference_excitation=float(d.excitation[ref]), chi=fitres.chi,
@@ -289,4 +302,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
         c_modal=(c_modal if method != "paper" else 2.0 * zeta_lin * math.sqrt(omega2_lin)),
         points_used=points_used, points_excluded=points_excluded, differences=differences,
         log_base=z, predictions=predictions,
-        data_warnings=warnings, case=case_res, fit=fitres, abscissa=abscissa)
+        data_warnings=warnings, case=case_res, fit=fitres, abscissa=abscissa,
+        control=str(d.control[0]), reference_amplitude=float(amp[ref]),
+        contradictions=[c.statement for c in contradictions],
+        contradiction_details=[{"kind": c.kind, **c.numbers} for c in contradictions])

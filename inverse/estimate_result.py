@@ -11,7 +11,8 @@ from inverse.power_law import PowerLawFit
 class Estimate:
     """Everything the estimator returns (SI units; zeta as fractions).
 
-    ``predictions`` holds one record per level of the mode: predicted and measured
+    ``predictions`` holds one record per level of the mode (its ``excitation`` and
+    ``held_amplitude``, the abscissa of a response-controlled series): predicted and measured
     ``omega2``, ``zeta`` and, from the previous level, ``delta_omega2`` (loss of
     omega^2, positive = softening, the sign of the paper's Table 3) and
     ``delta_zeta`` (growth), with percent errors ``100 (pred - meas)/meas`` and
@@ -19,6 +20,10 @@ class Estimate:
     ``points_excluded`` are the fit's level pairs (``x = log_z(e_from/e_ref)``, ``y =
     log_z Delta d``, the model's ``model_delta_d``); ``differences`` lists every pair
     of successive levels of the mode (held-out ones too) in the same form.
+    ``abscissa`` names the amplitude the fit regressed on (``reference_amplitude`` its
+    value at the reference level); ``contradictions`` are plain statements of what the
+    data show that no Iwan joint can do (:mod:`inverse.contradictions`).
+    ``kappa2_over_kappa1`` is the Iwan value only where ``chi_in_range``.
     """
 
     method: str
@@ -51,6 +56,15 @@ class Estimate:
     case: FEReference | None
     fit: PowerLawFit = field(repr=False)
     abscissa: str = "excitation"
+    control: str = "force"
+    reference_amplitude: float = float("nan")
+    contradictions: list = field(default_factory=list)
+    contradiction_details: list = field(default_factory=list)
+
+    @property
+    def chi_in_range(self) -> bool:
+        """True when the fitted chi lies in the Iwan range -1 < chi < 0."""
+        return bool(-1.0 < self.chi < 0.0)
 
     def to_dict(self) -> dict:
         """Plain-JSON form (``iwanfe estimate --json``)."""
@@ -62,9 +76,11 @@ class Estimate:
                     "slip_amplitudes": c.slip_amplitudes, "shares": c.shares}
         return {
             "method": self.method, "mode": self.mode, "fit_levels": self.fit_levels,
-            "abscissa": self.abscissa,
+            "abscissa": self.abscissa, "control": self.control,
             "reference_level": self.reference_level,
             "reference_excitation": self.reference_excitation,
+            "reference_amplitude": self.reference_amplitude,
+            "chi_in_iwan_range": self.chi_in_range,
             "chi": self.chi, "chi_interval": list(self.chi_interval),
             "kappa1_B": self.kappa1_B, "kappa1_B_interval": list(self.kappa1_B_interval),
             "B": self.B, "R": self.R,
@@ -78,5 +94,7 @@ class Estimate:
             "points_used": self.points_used, "points_excluded": self.points_excluded,
             "differences": self.differences, "log_base": self.log_base,
             "predictions": self.predictions, "data_warnings": self.data_warnings,
+            "contradictions": self.contradictions,
+            "contradiction_details": self.contradiction_details,
             "case": case,
         }

@@ -90,6 +90,7 @@ def predict_levels(fitres: PowerLawFit, d, in_fit, r, method: str, c_modal: floa
     predictions = []
     for i in range(levels.size):
         rec = {"level": int(levels[i]), "excitation": float(d.excitation[i]),
+               "held_amplitude": float(d.held_amplitude[i]),
                "held_out": bool(not in_fit[i]),
                "omega2": float(om2_p[i]), "omega2_interval": [float(lo_om2[i]), float(hi_om2[i])],
                "measured_omega2": float(omega2[i]),

@@ -62,7 +62,16 @@ class NewmarkProtocol:
     ``steps_per_period`` time steps per excitation period; ``tol`` relative bound on
     the remaining drift of the first harmonic; ``min_periods``/``max_periods`` per line
     (``max_periods`` reached raises); HHT ``alpha``; ``prewarp`` the frequency
-    correction of the trapezoidal rule.
+    correction of the trapezoidal rule. ``hb_start``: None carries the state from line
+    to line (from rest at the first line), like a test; harmonic-balance settings start
+    every line on the harmonic-balance orbit of that line instead
+    (:meth:`fe.newmark.NewmarkState.periodic`, phase 0), so that only the difference
+    between the two steady states has to decay (not the transients of the slow low
+    modes a line change excites), then integrate until periodic as above;
+    ``macro_steps_per_period`` (with ``hb_start``) is used instead of
+    ``steps_per_period`` on a level whose harmonic-balance orbits leave micro-slip (a
+    slip amplitude at or above the bank's largest slip limit at some line), where the
+    joint force is far from smooth (:meth:`steps_for`).
     """
 
     steps_per_period: int = 256
@@ -71,7 +80,16 @@ class NewmarkProtocol:
     max_periods: int = 5000
     alpha: float = 0.0
     prewarp: bool = True
+    hb_start: HBSettings | None = None
+    macro_steps_per_period: int | None = None
     name: str = "newmark"
+
+    def steps_for(self, slip_amplitude_max: float, slip_limit_max: float) -> int:
+        """Steps per period of a level whose largest slip amplitude (m) is
+        ``slip_amplitude_max``, for a bank whose largest slip limit is ``slip_limit_max``."""
+        if self.macro_steps_per_period and slip_amplitude_max >= slip_limit_max:
+            return int(self.macro_steps_per_period)
+        return int(self.steps_per_period)
 
 
 @dataclass(frozen=True)

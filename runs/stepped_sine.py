@@ -26,6 +26,7 @@ import numpy as np
 
 from fe.harmonic_balance import continuation
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
+from fe.newton_path import SteadyStateError
 from fe.reduction import JointBank, ReducedModel
 from runs.campaign import Campaign, CampaignResult, LevelResult, NewmarkProtocol, PaperProtocol
 from runs.executor import ExecutorSpec, run_sweep
@@ -93,6 +94,12 @@ def _newmark_level(model, bank, campaign, F, tick):
     slip = np.empty((n_lines, model.n_joints), dtype=complex)
     amp = np.empty((n_lines, model.n_joints))
     work = np.empty(n_lines)
+    orbits = None
+    if pr.hb_start is not None:
+        orbits = continuation(model, bank, load, 2 * np.pi * campaign.frequency_hz,
+                              pr.hb_start)
+        N = pr.steps_for(max(o.slip_amplitude.max() for o in orbits),
+                         float(bank.slip_limit.max()))
     k = np.arange(N + 1)
     for li, f_hz in enumerate(campaign.frequency_hz):
         w = 2 * np.pi * f_hz
@@ -100,12 +107,19 @@ def _newmark_level(model, bank, campaign, F, tick):
             w = w * np.pi / (N * np.tan(np.pi / N))
         dt = 2 * np.pi / (w * N)
         stepper = NewmarkIntegrator(model, bank, NewmarkSettings(dt=dt, alpha=pr.alpha))
+        if orbits is not None:
+            o = orbits[li]
+            state = NewmarkState.periodic(model, bank, o.harmonics, o.q, w, load.real, N, dt)
+            phase = 0.0
         theta = phase + w * dt * k
         e = np.cos(theta)
         state.e = e[0]
         prev, d_hist = None, []
         for p in range(1, pr.max_periods + 1):
-            run = stepper.run(load, e, state, energy=False)
+            try:
+                run = stepper.run(load, e, state, energy=False)
+            except RuntimeError as exc:          # the per-step Newton of the joints
+                raise SteadyStateError(f"{f_hz:g} Hz", str(exc), solver="Newmark") from None
             state = run.state
             z = np.concatenate([_first_harmonic(run.q[:-1] @ Bout.T, theta[:-1]),
                                 _first_harmonic(run.slip[:-1], theta[:-1])])
@@ -119,8 +133,9 @@ def _newmark_level(model, bank, campaign, F, tick):
                         break
             prev = z
         else:
-            raise RuntimeError(f"no periodic response after {pr.max_periods} periods at "
-                               f"{f_hz:g} Hz, F = {F:g} N")
+            raise SteadyStateError(f"{f_hz:g} Hz", f"no periodic response after "
+                                   f"{pr.max_periods} periods (drift "
+                                   f"{d_hist[-1] if d_hist else np.nan:.2e})", solver="Newmark")
         n_out = campaign.outputs.size
         rec[li] = z[:n_out] / F
         slip[li] = z[n_out:]
@@ -182,8 +197,12 @@ def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: i
     """Compute one force level of ``campaign`` (all lines), from rest."""
     F = float(campaign.force[level])
     t0 = time.perf_counter()
-    runner = _LEVEL_RUNNERS[campaign.protocol.name]
-    rec, slip, amp, work = runner(model, bank, campaign, F, tick)
+    # a protocol defined elsewhere brings its own runner (runs.response_control)
+    runner = getattr(campaign.protocol, "run_level", None) or _LEVEL_RUNNERS[campaign.protocol.name]
+    try:
+        rec, slip, amp, work = runner(model, bank, campaign, F, tick)
+    except SteadyStateError as exc:
+        raise exc.within(f"level {level + 1} of {campaign.force.size} (F = {F:.4g} N)") from None
     return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)
 
 

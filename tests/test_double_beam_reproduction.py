@@ -224,7 +224,10 @@ def test_cli_json_holds_the_estimates_and_the_simulation(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["double-beam", "--beta", "-1"], "beta must be >= 0"),
     (["double-beam", "--fit-levels", "1-12"], "exceed"),
-    (["double-beam", "--protocol", "newmark"], "lumped target only"),
+    (["double-beam", "--protocol", "paper"], "lumped target only"),
+    (["double-beam", "--glue-kt", "1e12"], "glue K_T must lie in 1e+06..1e+11 N/m"),
+    (["double-beam", "--glue-kt", "nan"], "glue K_T must lie in"),
+    (["lumped", "--glue-kt", "1e8"], "--glue-kt applies to the double-beam target only"),
     (["double-beam", "--band", "260", "250"], "band"),
     (["lumped", "--beta", "0"], "double-beam target only"),
 ])

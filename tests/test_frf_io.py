@@ -127,3 +127,72 @@ def test_uff_errors(tmp_path):
         read_frf(q)
     with pytest.raises(InputError, match="no such file"):
         read_frf(tmp_path / "none.uff")
+
+
+# ------------------------------------------------ header keys of a stepped-sine series
+
+def test_series_header_keys_and_force_column_round_trip(tmp_path):
+    """control, run_order, excitation, reference and the force column survive CSV
+    exactly; UFF keeps the keys in an ID line (no force column there)."""
+    s = random_set(quantity="accelerance", excitation=3.25e-3, reference="1+Z",
+                   control="response", run_order=7)
+    s.force = np.linspace(0.5, 2.0, s.freq_hz.size)
+    p = tmp_path / "level.csv"
+    write_frf_csv(p, s)
+    text = p.read_text().splitlines()
+    assert text[:5] == ["# quantity = accelerance", "# control = response", "# run_order = 7",
+                        "# excitation = 0.00325", "# reference = 1+Z"]
+    assert text[5].endswith(",force")
+    r = read_frf(p)
+    assert (r.control, r.run_order, r.excitation, r.reference) == ("response", 7, 3.25e-3, "1+Z")
+    np.testing.assert_array_equal(r.force, s.force)
+    np.testing.assert_array_equal(r.frf, s.frf)
+    s.force = None
+    write_frf_uff(tmp_path / "level.uff", s)
+    u = read_frf(tmp_path / "level.uff")
+    assert (u.control, u.run_order, u.excitation, u.reference, u.force) == (
+        "response", 7, 3.25e-3, "1+Z", None)
+    s.force = np.ones(s.freq_hz.size)
+    with pytest.raises(ValueError, match="no force column"):
+        write_frf_uff(tmp_path / "x.uff", s)
+
+
+def test_uff_keys_in_any_id_line_and_reference_label(tmp_path):
+    import pyuff
+
+    f = np.linspace(70.0, 90.0, 41)
+    sets = [dict(type=58, func_type=4, rsp_node=3, rsp_dir=3, ref_node=3, ref_dir=3, x=f,
+                 data=np.exp(1j * f), abscissa_spacing=1, binary=0,
+                 orddenom_spec_data_type=13, id1="bolted beam",
+                 id2="control=Response run_order=4", id5="excitation=2e-3; reference=drive")]
+    p = tmp_path / "k.unv"
+    pyuff.UFF(str(p)).write_sets(sets, mode="overwrite")
+    r = read_frf(p)
+    assert (r.control, r.run_order, r.excitation, r.reference) == ("response", 4, 2e-3, "drive")
+
+
+def test_series_header_errors(tmp_path):
+    ok = "freq_hz,re_1,im_1\n10,1,2\n11,1,2\n"
+    assert _csv(tmp_path, "# control = voltage\n" + ok) == \
+        "1:control: control must be force or response, got 'voltage'"
+    assert _csv(tmp_path, "# run_order = 2.5\n" + ok) == \
+        "1:run_order: run_order must be an integer >= 1, got '2.5'"
+    assert _csv(tmp_path, "# run_order = 0\n" + ok).startswith("1:run_order:")
+    assert _csv(tmp_path, "freq_hz,re_1,im_1,force\n10,1,2,0.5\n11,1,2,0\n") == \
+        "3:force: force must be > 0 N, got 0"
+    assert _csv(tmp_path, "freq_hz,re_1,im_1,force,force\n10,1,2,1,1\n11,1,2,1,1\n") == \
+        "1:force: duplicate column name"
+
+
+def test_command_line_values_override_the_file(tmp_path):
+    from ident.frf_header import with_overrides
+
+    s = random_set(excitation=1.0, control="force", run_order=2, reference="1+Z")
+    t = with_overrides(s, excitation=4.0, control="response", run_order=9, reference="7+Z")
+    assert (t.excitation, t.control, t.run_order, t.reference) == (4.0, "response", 9, "7+Z")
+    assert (s.excitation, s.control) == (1.0, "force")          # the file's set unchanged
+    assert with_overrides(s).excitation == 1.0
+    with pytest.raises(InputError, match="excitation must be"):
+        with_overrides(s, excitation=-2.0)
+    with pytest.raises(InputError, match="control must be"):
+        with_overrides(s, control="amplitude")

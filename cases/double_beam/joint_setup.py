@@ -5,7 +5,8 @@ what the solver runs; the other choices of the study are in
 :mod:`cases.double_beam.settings`.
 
 Joints. The FE model carries one tangential joint per glue node with a share ``w_m =
-k_m / K_T`` of the stuck glue stiffness ``K_T = 1e8 N/m``. Each becomes a
+k_m / K_T`` of the stuck glue stiffness ``K_T`` (1e8 N/m assumed, or ``--glue-kt`` with
+the grip re-calibrated: :func:`cases.double_beam.calibration.calibrated_model`). Each becomes a
 four-parameter Iwan element with the same ``chi`` and the same share of ``R`` and ``S``
 (``R_m = w_m R``), hence the same ``phi_max``: this is exactly the model
 :func:`inverse.estimate.b_tilde` assumes (eq. 1 of :mod:`inverse.estimate`), so the
@@ -201,21 +202,24 @@ def nonlinear_model(model, setup: JointSetup, study: DoubleBeamStudy):
     return red, bank
 
 
-def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy):
+def level_campaign(model, setup: JointSetup, study: DoubleBeamStudy, protocol: str = "hb"):
     """The stepped-sine campaign of the study: ``study.lines`` (Hz, upward) at the
     forces ``setup.force`` (N) on the drive DOF, every DOF recorded, harmonic balance
-    with ``study.hb`` (:class:`runs.stepped_sine.HBProtocol`).
+    with ``study.hb`` (``protocol="hb"``) or time integration (``"newmark"``;
+    :func:`cases.double_beam.protocols.campaign_protocol`).
 
     Returns
     -------
     runs.stepped_sine.Campaign
     """
-    from runs.campaign import Campaign, HBProtocol
+    from cases.double_beam.protocols import campaign_protocol
+    from runs.campaign import Campaign
 
     n = model.M.shape[0]
     load = np.zeros(n)
     load[int(model.drive_dof)] = 1.0
-    return Campaign(study.lines, setup.force, load, np.arange(n), HBProtocol(study.hb))
+    return Campaign(study.lines, setup.force, load, np.arange(n),
+                    campaign_protocol(protocol, study.hb))
 
 
 def mode_weights(model, setup: JointSetup):

@@ -63,6 +63,11 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
           _f(r["phi_max"], ".4e"), _f(r["F_S"], ".4g"), _f(r["top_linear_slip_over_phi_max"], ".4f"),
           _f(r.get("top_simulated_slip_over_phi_max"), ".4f")] for r in rep.force_scale_rows])
 
+    if rep.protocol_comparison is not None:
+        from cases.double_beam.protocols import comparison_lines
+
+        out += ["## Newmark against harmonic balance", "", "```"]
+        out += comparison_lines(rep.protocol_comparison) + ["```", ""]
     out.append("## Measured vs simulated, per level")
     out.append("")
     out.append("Differences are simulated - measured. Loss = omega^2(level 1) - omega^2(level); "
@@ -225,7 +230,8 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
     out.append(f"- campaign: {camp.frequency_hz.size} lines x {camp.force.size} levels, "
                f"{int(camp.computed.sum())} levels computed "
                f"({camp.force.size - int(camp.computed.sum())} loaded from the store), mean "
-               f"Newton iterations per line {camp.work.mean():.2f}, {t['campaign']:.1f} s")
+               f"{'Newton iterations' if rep.protocol == 'hb' else 'periods'} per line "
+               f"{camp.work.mean():.2f}, {t['campaign']:.1f} s")
     out.append(f"- setup {t['setup']:.1f} s, identification {t['identification']:.1f} s, "
                f"estimation {t['estimation']:.1f} s" + (f", total wall time {wall_time:.1f} s"
                                                         if wall_time is not None else ""))

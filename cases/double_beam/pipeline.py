@@ -28,6 +28,7 @@ from cases.double_beam.joint_setup import (
     nonlinear_model,
 )
 from cases.double_beam.model import build_double_beam
+from cases.double_beam.protocols import protocol_comparison
 from cases.double_beam.report import DoubleBeamReport
 from cases.double_beam.settings import DoubleBeamStudy, measured_levels
 from ident.levels import identify_levels
@@ -79,8 +80,22 @@ def _estimate_all(data, study, model, amplitude, slip_level1, phi, shares) -> di
     return out
 
 
+def _campaign(red, bank, camp, store, progress, workers, executor):
+    """Run (or resume) ``camp`` in ``store/campaign-<protocol>-<hash12>``."""
+    from runs.stepped_sine import campaign_hash, run_campaign
+
+    store_dir = None
+    if store is not None:
+        store_dir = (Path(store) / f"campaign-{camp.protocol.name}-"
+                     f"{campaign_hash(red, bank, camp)[:12]}")
+    res = run_campaign(red, bank, camp, store=store_dir, progress=progress,
+                       workers=None if executor is not None else workers, executor=executor)
+    return res, store_dir
+
+
 def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
-                   workers: int = 1, model=None, executor=None) -> DoubleBeamReport:
+                   workers: int = 1, model=None, executor=None, protocol: str = "hb",
+                   calibration=None) -> DoubleBeamReport:
     """One simulation of the study (module docstring), without the weak-joint reruns.
 
     Parameters
@@ -98,13 +113,18 @@ def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
     executor : str or runs.executor.ExecutorSpec, optional
         Where the levels run (:func:`runs.stepped_sine.run_campaign`); results are bitwise
         the same. A local cluster or pool is started per campaign.
+    protocol : {"hb", "newmark"}
+        The campaign's solver (:mod:`cases.double_beam.protocols`). With ``"newmark"``
+        the harmonic-balance campaign of the same lines is run (or loaded from the
+        store) and identified too, and the report holds both side by side
+        (``protocol_comparison``).
+    calibration : cases.double_beam.calibration.GripCalibration, optional
+        How ``model``'s glue stiffness and grip were set, for the report.
 
     Returns
     -------
     DoubleBeamReport
     """
-    from runs.stepped_sine import campaign_hash, run_campaign
-
     timings = {}
     t0 = time.perf_counter()
     model = build_double_beam() if model is None else model
@@ -113,13 +133,9 @@ def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
     red, bank = nonlinear_model(model, setup, study)
     timings["setup"] = time.perf_counter() - t0
 
-    camp = level_campaign(model, setup, study)
-    store_dir = None
-    if store is not None:
-        store_dir = Path(store) / f"campaign-hb-{campaign_hash(red, bank, camp)[:12]}"
     t0 = time.perf_counter()
-    res = run_campaign(red, bank, camp, store=store_dir, progress=progress,
-                       workers=None if executor is not None else workers, executor=executor)
+    res, store_dir = _campaign(red, bank, level_campaign(model, setup, study, protocol), store,
+                               progress, workers, executor)
     timings["campaign"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -133,6 +149,17 @@ def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
     finally:
         if bar is not None:
             bar.close()
+    comparison = None
+    if protocol != "hb":
+        t1 = time.perf_counter()
+        hb_res, _ = _campaign(red, bank, level_campaign(model, setup, study, "hb"), store,
+                              progress, workers, executor)
+        hb_ids = identify_campaign(model, setup, study, hb_res, phi, weights)
+        proto = level_campaign(model, setup, study, protocol).protocol
+        steps = [proto.steps_for(float(a.max()), float(bank.slip_limit.max()))
+                 for a in hb_res.slip_amplitude]
+        comparison = protocol_comparison(data.level, (ident, mf), hb_ids, res, hb_res, steps)
+        timings["campaign_hb_check"] = time.perf_counter() - t1
     if not np.all(np.isfinite(ident.omega2)):
         bad = data.level[~np.isfinite(ident.omega2)]
         raise RuntimeError(f"no mode identified near {setup.omega_n / (2 * math.pi):.1f} Hz at "
@@ -168,4 +195,6 @@ def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
                             weak_joint_rows=[],
                             store=None if store_dir is None else str(store_dir),
                             timings=timings, sliders_per_joint=int(bank.n_sliders),
-                            response_dof=int(model.response_dof))
+                            response_dof=int(model.response_dof), protocol=protocol,
+                            protocol_comparison=comparison,
+                            calibration=None if calibration is None else calibration.to_dict())

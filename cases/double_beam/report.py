@@ -46,6 +46,9 @@ class DoubleBeamReport:
     sliders_per_joint: int = 0
     response_dof: int = 0
     files: list = field(default_factory=list)
+    protocol: str = "hb"
+    protocol_comparison: dict | None = None     # cases.double_beam.protocols
+    calibration: dict | None = None             # GripCalibration.to_dict()
 
     # ------------------------------------------------------------------ derived
     @property
@@ -237,10 +240,13 @@ class DoubleBeamReport:
                             "statements": assumption_statements(self)},
             "force_scale_dependence": self.force_scale_rows,
             "weak_joint_recovery": self.weak_joint_rows,
-            "campaign": {"hash": camp.hash, "store": self.store,
+            "campaign": {"protocol": self.protocol, "hash": camp.hash, "store": self.store,
                          "levels_computed": int(camp.computed.sum()),
                          "elapsed_s": camp.elapsed,
-                         "newton_iterations_mean": camp.work.mean(axis=1)},
+                         ("newton_iterations_mean" if self.protocol == "hb"
+                          else "periods_per_line_mean"): camp.work.mean(axis=1)},
+            "calibration": self.calibration,
+            "protocol_comparison": self.protocol_comparison,
             "timings_s": self.timings,
             "files": [str(f) for f in self.files],
         }

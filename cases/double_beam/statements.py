@@ -88,7 +88,19 @@ def assumption_statements(rep: "DoubleBeamReport") -> list[str]:
     :mod:`cases.double_beam.settings` with this run's numbers, one per line."""
     su, st = rep.setup, rep.study
     src = su.source
-    return [
+    model = []
+    if rep.calibration is not None:
+        model.append(f"Model: {rep.calibration['statement']}; every other FE property "
+                     f"assumed (cases/double_beam/model.py).")
+    solver = (f"harmonic balance ({st.hb.n_harmonics} harmonics, odd={st.hb.odd_only}, "
+              f"{st.hb.n_time} AFT samples) with continuation")
+    if rep.protocol == "newmark":
+        from cases.double_beam.protocols import NEWMARK_STEPS, NEWMARK_TOL
+
+        solver = (f"Newmark time integration (average acceleration, {NEWMARK_STEPS} steps per "
+                  f"period, pre-warped), every line started on its harmonic-balance orbit "
+                  f"and integrated until periodic to {NEWMARK_TOL:g}")
+    return model + [
         f"Joints: one Iwan element per glue node ({su.shares.size}), shares "
         f"{', '.join(f'{w:.3g}' for w in su.shares)} of K_T = {su.K_T:.3g} N/m; chi = {su.chi:.5f} "
         f"and R = {su.R:.4g} N/m^(chi+2) from the '{src.method}' estimate of measured levels "
@@ -104,9 +116,8 @@ def assumption_statements(rep: "DoubleBeamReport") -> list[str]:
         f"(measured level-1 zeta {100 * rep.measured.zeta[0]:.4f} % less the joint share "
         f"|kappa1|B / (2 Omega^2) at level 1).",
         f"Lines: {st.lines.size} lines, {st.band_hz[0]:g}-{st.band_hz[1]:g} Hz every "
-        f"{st.df_hz:g} Hz (the paper: 2 Hz over 50-450 Hz), swept upward, harmonic balance "
-        f"({st.hb.n_harmonics} harmonics, odd={st.hb.odd_only}, {st.hb.n_time} AFT samples) with "
-        f"continuation; every level starts from virgin joints.",
+        f"{st.df_hz:g} Hz (the paper: 2 Hz over 50-450 Hz), swept upward, {solver}; every "
+        f"level starts from virgin joints.",
         f"Reduced model: {st.n_modes} stuck-glue modes + {su.shares.size} static joint modes; "
         f"Jenkins banks of {rep.sliders_per_joint} sliders per joint, {st.sliders_per_octave} "
         f"per octave of slip limit.",

@@ -31,20 +31,23 @@ __all__ = ["run_study"]
 
 
 def run_study(study: DoubleBeamStudy = DoubleBeamStudy(), store=None, progress: bool = True,
-              workers: int = 1, model=None, executor=None) -> DoubleBeamReport:
+              workers: int = 1, model=None, executor=None, protocol: str = "hb",
+              calibration=None) -> DoubleBeamReport:
     """Run the double-beam reproduction (module docstring).
 
     The parameters are those of :func:`cases.double_beam.pipeline.simulate_study`; the
     model (default: the shipped case), the campaign store's parent directory, the
-    progress bars and the executor serve the weak-joint reruns too (a local cluster or
-    pool is started per campaign). Returns the :class:`DoubleBeamReport` of the study
-    with ``weak_joint_rows`` (one per ``study.weak_joint_scales``).
+    progress bars, the executor and the protocol serve the weak-joint reruns too (a
+    local cluster or pool is started per campaign). Returns the
+    :class:`DoubleBeamReport` of the study with ``weak_joint_rows`` (one per
+    ``study.weak_joint_scales``).
     """
     model = build_double_beam() if model is None else model
     rep = simulate_study(study, store=store, progress=progress, workers=workers, model=model,
-                         executor=executor)
+                         executor=executor, protocol=protocol, calibration=calibration)
     t0 = time.perf_counter()
     rep.weak_joint_rows = weak_joint_recovery(study, rep.setup, store=store, progress=progress,
-                                              workers=workers, model=model, executor=executor)
+                                              workers=workers, model=model, executor=executor,
+                                              protocol=protocol)
     rep.timings["weak_joint_runs"] = time.perf_counter() - t0
     return rep

@@ -18,7 +18,7 @@ __all__ = ["weak_joint_recovery"]
 
 def weak_joint_recovery(study: DoubleBeamStudy, setup: JointSetup, store=None,
                         progress: bool = True, workers: int = 1, model=None,
-                        executor=None) -> list[dict]:
+                        executor=None, protocol: str = "hb") -> list[dict]:
     """Rerun the simulation with ``R`` times each of ``study.weak_joint_scales``.
 
     The joint's relative softening at a given level scales with ``R`` (``kappa2
@@ -32,7 +32,7 @@ def weak_joint_recovery(study: DoubleBeamStudy, setup: JointSetup, store=None,
     for k in study.weak_joint_scales:
         sub = dataclasses.replace(study, chi=setup.chi, R=setup.R * k, weak_joint_scales=())
         rep = simulate_study(sub, store=store, progress=progress, workers=workers,
-                             model=model, executor=executor)
+                             model=model, executor=executor, protocol=protocol)
         c = rep.comparison()
         i7 = max(i for i, r in enumerate(c) if r["level"] in study.fit)
         mf = rep.modal_filter
@@ -45,5 +45,7 @@ def weak_joint_recovery(study: DoubleBeamStudy, setup: JointSetup, store=None,
                                                           / mf.delta_c_decoupled[i7]),
                "recovery": {"lscf": rep.recovery("lscf"),
                             "modal_filter": rep.recovery("modal_filter")}}
+        if rep.protocol_comparison is not None:
+            row["protocol_comparison"] = rep.protocol_comparison
         rows.append(row)
     return rows

@@ -13,6 +13,7 @@ import json
 from pathlib import Path
 
 from cases.registry import CASES, MEASURED_DATA, fe_check
+from cli.series_options import add_series_arguments, series_from_args
 from ident.errors import InputError
 from ident.measured import read_measured
 from inverse.diagnose import T_CAUSE, W_AMBIGUOUS, diagnose
@@ -39,8 +40,7 @@ def register(subparsers) -> None:
             "Errors: rms standardized prediction errors on held-out levels."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    parser.add_argument("file", metavar="FILE", nargs="?", default=None,
-                        help="measured-data CSV file (or use --case)")
+    add_series_arguments(parser, required=False)   # FILE...: a table or FRF files
     parser.add_argument("--case", default=None, metavar="NAME",
                         help="instead of FILE: 'double-beam' (the shipped paper data) or "
                              "'synthetic:LABEL:SEED' (a simulated, identified series hiding "
@@ -54,7 +54,7 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def load(file: str | None, case: str | None):
+def load(file: str | None, case: str | None, args=None):
     """The MeasuredData to diagnose, and the hidden truth for synthetic cases.
 
     ``FILE`` alone, ``--case`` alone (its shipped data or a synthetic case), or ``FILE``
@@ -66,7 +66,7 @@ def load(file: str | None, case: str | None):
         if case is not None and case not in CASES:
             raise InputError(f"--case {case!r} with FILE: the case must be a model "
                              f"({', '.join(CASES)})")
-        return read_measured(file), None
+        return (series_from_args(args) if args is not None else read_measured(file)), None
     if case in MEASURED_DATA:
         return read_measured(MEASURED_DATA[case]), None
     parts = case.split(":")
@@ -146,6 +146,9 @@ def format_text(r: dict, source: str) -> str:
         from cases.double_beam.fe_check import format_fe_check
 
         lines.extend(format_fe_check(r["fe_check"]))
+    if "fe" in r:
+        from cases.double_beam.fe_diagnosis_report import format_fe
+        lines.extend(format_fe(r["fe"]))
     return "\n".join(lines)
 
 
@@ -176,7 +179,8 @@ def write_report(result: dict, out: Path, source: str) -> list[Path]:
 
 
 def run(args) -> int:
-    data, truth = load(args.file, args.case)
+    args.file = " ".join(args.files) or None
+    data, truth = load(args.file, args.case, args)
     source = args.file or args.case
     result = diagnose(data, mode=args.mode)
     if truth is not None:
@@ -184,6 +188,9 @@ def run(args) -> int:
     if args.case in CASES:  # a model case: its FE-level check
         level1 = data.for_mode(result["mode"])
         result["fe_check"] = fe_check(args.case, float(level1.omega2[0]))
+    if args.case == "double-beam":  # the FE model refitted, base vs extended (issue 13)
+        from cases.double_beam.fe_diagnosis_report import add_fe_diagnosis
+        add_fe_diagnosis(result, data, out=args.out)
     if args.out:
         write_report(result, Path(args.out), Path(source).name if args.file else source)
     if args.json:

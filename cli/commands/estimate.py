@@ -1,9 +1,12 @@
 """``iwanfe estimate``: Iwan chi and R from the growth of damping between levels.
 
-Reads a measured-data CSV (``shared/spec/measured-data.md``), fits chi and
+Reads a measured-data CSV (``shared/spec/measured-data.md``) or the FRF files of a
+series (one per level, identified first: :mod:`cli.series_options`), fits chi and
 ``|kappa1| B`` to the successive damping differences of the chosen levels (paper eq.
 33-35 with the factor 2 of eq. 45 restored), predicts frequency and damping at every
 level (eq. 43, 46), and with ``--case`` computes B~ and R~ from the FE model (eq. 37).
+A response-controlled series is regressed on the response amplitude each level held.
+What the data show that no Iwan joint can do is printed as contradictions.
 """
 from __future__ import annotations
 
@@ -11,6 +14,7 @@ import argparse
 import math
 
 from cases.registry import CASES, build_case
+from cli.series_options import add_series_arguments, series_from_args
 from inverse.estimate import (
     DEFAULT_CONFIDENCE,
     DEFAULT_FORCE_SCALE,
@@ -19,7 +23,6 @@ from inverse.estimate import (
     format_levels,
 )
 from runs.jsonio import print_json
-from ident.measured import read_measured
 
 NAME = "estimate"
 
@@ -36,10 +39,13 @@ def register(subparsers) -> None:
             "are excluded and listed. Methods: paper = printed kappa2 (eq. A15), zeta_n "
             "omega_n/omega ~ zeta_n, joint amplitude proportional to excitation; exact = "
             "exact kappa2 and eq. 45 without that approximation; amplitude = as exact but "
-            "regressed on the file's response_amplitude column."),
+            "regressed on the file's response_amplitude column. A response-controlled "
+            "series (control = response) is always regressed on the response amplitude "
+            "each level held. Input: a measured-data CSV or the FRF files of a series "
+            "(identified first, as by `iwanfe identify`)."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    parser.add_argument("file", metavar="FILE", help="measured-data CSV file")
+    add_series_arguments(parser)
     parser.add_argument("--case", choices=CASES, default=None,
                         help="FE model for B~ and R~ (without it B and R are null)")
     parser.add_argument("--fit-levels", default=None, metavar="LEVELS",
@@ -56,6 +62,9 @@ def register(subparsers) -> None:
                              "voltage; an assumption, R~ scales as its -(chi+1) power)")
     parser.add_argument("--confidence", type=float, default=DEFAULT_CONFIDENCE,
                         help="level of the t-intervals")
+    parser.add_argument("--backbone", action="store_true",
+                        help="with --case: predict every level from the FE model's EPMC "
+                             "backbone with the estimated joint (iwanfe backbone)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--plot", metavar="FILE.png", default=None,
                         help="write the log-slope plot (paper Fig. 8)")
@@ -65,24 +74,53 @@ def register(subparsers) -> None:
 def run(args) -> int:
     if not math.isfinite(args.force_scale) or args.force_scale <= 0:
         raise ValueError(f"--force-scale must be a positive number, got {args.force_scale}")
-    data = read_measured(args.file)
+    data = series_from_args(args)
     model = None if args.case is None else build_case(args.case)
     est = estimate(data, fit_levels=args.fit_levels, method=args.method, mode=args.mode,
                    model=model, case_name=args.case or "model", force_scale=args.force_scale,
                    fe_mode=args.fe_mode, confidence=args.confidence)
+    backbone = _backbone(args, data, est)
     if args.plot:
         from viz.logslope import plot_estimate
 
-        plot_estimate(est, args.plot, title=f"{args.file}: mode {est.mode}")
+        plot_estimate(est, args.plot, title=f"{_short(args.files)}: mode {est.mode}")
     if args.json:
         out = est.to_dict()
-        out["file"] = args.file
+        out["file"] = args.files[0]
+        out["files"] = list(args.files)
+        if backbone is not None:
+            out["backbone"] = backbone
         print_json(out)
     else:
-        print(format_table(est, args.file))
+        print(format_table(est, _short(args.files)))
+        if backbone is not None:
+            from cli.commands.backbone import format_prediction
+            print(format_prediction(backbone))
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0
+
+
+def _short(files) -> str:
+    return files[0] if len(files) == 1 else f"{files[0]} .. {files[-1]} ({len(files)} FRF files)"
+
+
+def _kappa_label(est) -> str:
+    if not est.chi_in_range:
+        return ("eq. A15 evaluated at a chi outside -1 < chi < 0: no Iwan joint has this "
+                "value")
+    return "printed eq. A15" if est.method == "paper" else "exact"
+
+
+def _backbone(args, data, est):
+    """The backbone predictions of ``--backbone`` (cases.backbone_prediction), or None."""
+    if not args.backbone:
+        return None
+    if args.case is None:
+        raise ValueError("--backbone needs --case (the FE model the joint is put into)")
+    from cases.backbone_prediction import predict_from_backbone
+
+    return predict_from_backbone(data, est, args.case, args.force_scale)
 
 
 def format_table(est, source: str = "") -> str:
@@ -93,10 +131,12 @@ def format_table(est, source: str = "") -> str:
     ci = est.chi_interval
     ki = est.kappa1_B_interval
     lines.append(f"  chi          = {est.chi:.5f}   ({c:.0%} interval {ci[0]:.3f} .. {ci[1]:.3f})")
+    at = (f"response amplitude {est.reference_amplitude:g}, held; force "
+          f"{est.reference_excitation:g}" if est.control == "response"
+          else f"excitation {est.reference_excitation:g}")
     lines.append(f"  |kappa1| B   = {est.kappa1_B:.4g} 1/s^2   ({ki[0]:.3g} .. {ki[1]:.3g}), "
-                 f"at level {est.reference_level} (excitation {est.reference_excitation:g})")
-    lines.append(f"  kappa2/|kappa1| = {est.kappa2_over_kappa1:.4f} "
-                 f"({'printed eq. A15' if est.method == 'paper' else 'exact'})")
+                 f"at level {est.reference_level} ({at})")
+    lines.append(f"  kappa2/|kappa1| = {est.kappa2_over_kappa1:.4f} ({_kappa_label(est)})")
     if est.ratio_z is not None:
         lines.append(f"  eq. 35: z = {est.ratio_z:.4g}, slope chi+1 = {est.chi + 1:.5f}, "
                      f"intercept a0 = {est.intercept_a0:.4f}, residual std {est.residual_std:.3g} "
@@ -136,6 +176,8 @@ def format_table(est, source: str = "") -> str:
                      f"{100 * p['zeta']:7.4f}  {100 * p['measured_zeta']:7.4f}")
     lines.append("  (* = held out of the fit; loss = omega^2[v-1] - omega^2[v]; "
                  "err% = 100 (pred - meas)/meas)")
+    for c in est.contradictions:
+        lines.append(f"contradiction: {c}")
     for w in est.data_warnings:
         lines.append(f"warning: {w}")
     return "\n".join(lines)

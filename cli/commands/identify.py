@@ -1,12 +1,14 @@
 """``iwanfe identify``: natural frequencies, damping ratios and shapes from FRF files.
 
 Each FILE holds one FRF set (one reference, one or more response points) as CSV or
-UFF 58 (:mod:`ident.frf_files`). Several FILEs are several excitation levels: the
-excitation of each comes from ``--excitation`` (one value per file, in file order) or
-from the file (CSV line ``# excitation = V``; UFF ID line ``excitation=V``). Levels are
-numbered by increasing excitation, the file order is the run order, and modes are
-followed from level to level by frequency and MAC. ``--out`` writes the measured-data
-CSV (``shared/spec/measured-data.md``) that ``iwanfe estimate`` reads.
+UFF 58 (:mod:`ident.frf_files`). Several FILEs are the levels of a stepped-sine series
+(:mod:`ident.series`): each file's header says what the level held (``# excitation``),
+under which ``# control`` (force or response) and when (``# run_order``); the command
+line overrides the files. Levels are numbered by increasing held level, the levels
+agree on the number of modes in the band, modes are followed from level to level by
+frequency and MAC, and every mode carries its fit warnings (fit error, stability, band
+sensitivity). ``--out`` writes the measured-data CSV (``shared/spec/measured-data.md``)
+that ``iwanfe estimate`` and ``iwanfe diagnose`` read.
 """
 from __future__ import annotations
 
@@ -16,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ident.frf_files import read_frf
-from ident.identify import identify
-from ident.poles import QUANTITIES, mac
-from ident.tracking import modal_data_from_levels
+from ident.poles import mac
+from ident.series import identify_series, read_series_sets
+from ident.series_table import series_table
+from cli.series_options import add_series_arguments, check_series_args, progress_bar
 from runs.jsonio import print_json
 
 NAME = "identify"
@@ -34,21 +36,18 @@ def register(subparsers) -> None:
             "by LSCF with automatic selection of the stable poles and residual-corrected "
             "refinement (ident.identify). One FILE per excitation level; with several "
             "FILEs the modes are followed across levels and --out writes the "
-            "measured-data CSV for `iwanfe estimate`. CSV: freq_hz, re_<point>, "
-            "im_<point> columns and optional '# quantity = ...', '# excitation = ...' "
-            "lines; UFF: data sets 58 (FRF), excitation in an ID line 'excitation=V'."),
+            "measured-data CSV for `iwanfe estimate` and `iwanfe diagnose`. CSV: freq_hz, "
+            "re_<point>, im_<point> and an optional force column (N per line), optional "
+            "'# quantity|control|run_order|excitation|reference = ...' lines; UFF: data "
+            "sets 58 (FRF), the same keys as key=value in an ID line. excitation is the "
+            "level the test held: the drive amplitude under force control, the "
+            "drive-point response amplitude under response control."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    parser.add_argument("files", nargs="+", metavar="FILE", help="FRF files (.csv, .uff, .unv)")
-    parser.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), default=None,
-                        help="frequency band [Hz] (default: all lines)")
-    parser.add_argument("--modes", type=int, default=None, metavar="N",
-                        help="number of modes per level (default: decided by stabilization)")
-    parser.add_argument("--quantity", choices=QUANTITIES, default=None,
-                        help="FRF quantity if the file does not say (default receptance)")
-    parser.add_argument("--excitation", type=float, nargs="+", default=None, metavar="V",
-                        help="excitation amplitude of each FILE, in file order (overrides "
-                             "the files)")
+    add_series_arguments(parser, files_help="FRF files (.csv, .uff, .unv), one per level")
+    parser.add_argument("--no-band-check", dest="band_check", action="store_false",
+                        help="skip the band-sensitivity check (one more identification "
+                             "per mode and level)")
     parser.add_argument("--max-order", type=int, default=None,
                         help="highest LSCF model order (default from the data)")
     parser.add_argument("--weighting", choices=("auto", "relative", "uniform"), default="auto",
@@ -73,60 +72,29 @@ def _normalized_shape(shape) -> np.ndarray:
 
 def run(args) -> int:
     files = list(args.files)
-    if args.excitation is not None and len(args.excitation) != len(files):
-        raise ValueError(f"--excitation needs one value per FILE: got {len(args.excitation)} "
-                         f"values for {len(files)} files")
-    if args.modes is not None and args.modes < 1:
-        raise ValueError(f"--modes must be >= 1, got {args.modes}")
-    if args.band is not None and not args.band[0] < args.band[1]:
-        raise ValueError(f"--band needs LO < HI, got {args.band[0]:g} {args.band[1]:g}")
-    sets = [read_frf(f) for f in files]
-    excitation = []
-    for k, s in enumerate(sets):
-        e = args.excitation[k] if args.excitation is not None else s.excitation
-        if e is not None and not (np.isfinite(e) and e > 0):
-            raise ValueError(f"excitation of {files[k]} must be > 0, got {e:g}")
-        excitation.append(e)
-    several = len(files) > 1
-    if (several or args.out) and any(e is None for e in excitation):
-        missing = files[excitation.index(None)]
-        raise ValueError(f"excitation level of {missing} unknown: give --excitation V per "
-                         "file, a CSV line '# excitation = V' or a UFF ID line 'excitation=V'")
-
-    results = []
-    try:
-        from tqdm import tqdm
-        iterator = tqdm(list(enumerate(sets)), desc="identify", unit="file", file=sys.stderr,
-                        disable=None if len(sets) > 2 else True, leave=False)
-    except ImportError:  # pragma: no cover
-        iterator = enumerate(sets)
-    for k, s in iterator:
-        quantity = s.quantity or args.quantity or "receptance"
-        if s.quantity and args.quantity and s.quantity != args.quantity:
-            raise ValueError(f"{files[k]} holds {s.quantity}, --quantity says {args.quantity}")
-        try:
-            res = identify(s.freq_hz, s.frf, band=args.band, n_modes=args.modes,
-                           quantity=quantity, max_order=args.max_order,
-                           weighting=args.weighting, pseudo_modes=args.pseudo_modes)
-        except ValueError as exc:
-            raise ValueError(f"{files[k]}: {exc}") from None
-        results.append((s, quantity, res))
+    check_series_args(args)
+    sets = read_series_sets(files, args.excitation, args.control, args.run_order,
+                            args.reference)
+    options = dict(max_order=args.max_order, weighting=args.weighting,
+                   pseudo_modes=args.pseudo_modes)
+    fits = identify_series(sets, band=args.band, n_modes=args.modes, quantity=args.quantity,
+                           options=options, progress=progress_bar(len(sets)),
+                           check_band=args.band_check)
 
     if args.plot:
         from viz.stabilization import plot_stabilization
-        for k, (s, _, res) in enumerate(results):
+        for k, fit in enumerate(fits):
             path = Path(args.plot)
-            if several:
+            if len(files) > 1:
                 path = path.with_name(f"{path.stem}-{k + 1}{path.suffix or '.png'}")
-            d = res.diagram
+            d = fit.result.diagram
             plot_stabilization(d.order, d.frequency_hz, d.status, indicator_hz=d.indicator_hz,
                                indicator=d.indicator, selected_hz=d.selected_hz,
                                title=Path(files[k]).name, path=path)
 
     table = None
-    if several or args.out:
-        table = modal_data_from_levels(excitation, [r.modes for _, _, r in results],
-                                       sources=[Path(f).name for f in files])
+    if len(files) > 1 or args.out:
+        table = series_table(fits)
         if args.out:
             from ident.measured import write_measured
             write_measured(args.out, table)
@@ -136,35 +104,51 @@ def run(args) -> int:
                       "than 4 levels; estimate needs at least 4", file=sys.stderr)
 
     if args.json:
-        print_json(_as_json(files, excitation, results, table))
+        print_json(_as_json(files, fits, table))
         return 0
-    for k, (s, quantity, res) in enumerate(results):
-        _print_set(files[k], s, quantity, excitation[k], res, args.band)
-    if table is not None and several:
-        print("\nmodes across levels (level, excitation, mode, frequency_hz, zeta, MAC "
-              "with the level below):")
-        order = np.lexsort((table.level, table.mode))
-        for i in order:
-            print(f"  {table.level[i]:3d} {table.excitation[i]:10.4g}  mode {table.mode[i]:2d}"
-                  f"  {table.extra['x_frequency_hz'][i]:12.5f}  {table.zeta[i]:.6f}"
-                  f"  {table.extra['x_mac'][i]:.4f}")
+    for k, fit in enumerate(fits):
+        _print_set(files[k], fit, args.band)
+    if table is not None and len(files) > 1:
+        _print_levels(table)
     if args.out:
         print(f"wrote {args.out}")
     return 0
 
 
-def _print_set(name, s, quantity, excitation, res, band):
-    lo, hi = band if band is not None else (s.freq_hz[0], s.freq_hz[-1])
-    exc = f", excitation {excitation:g}" if excitation is not None else ""
-    print(f"{name}: {len(s.points)} point(s), {quantity}, {lo:g}-{hi:g} Hz{exc}, "
+def _print_levels(table):
+    held = "response_amplitude" if table.response_controlled else "excitation"
+    print(f"\nmodes across levels (control {table.control[0]}; levels by {held}; "
+          "std = the identification's standard uncertainty; MAC with the level below):")
+    print(f"  {'level':>5} {'excitation':>11} {'response':>11} {'mode':>4} {'frequency_hz':>12}"
+          f" {'std_hz':>8} {'zeta':>9} {'std':>8} {'fit_err%':>8} {'MAC':>6}")
+    x = table.extra
+    for i in np.lexsort((table.level, table.mode)):
+        f = x["x_frequency_hz"][i]
+        s_f = (table.omega2_std[i] / (8 * np.pi ** 2 * f) if table.omega2_std is not None
+               else float("nan"))
+        s_z = table.zeta_std[i] if table.zeta_std is not None else float("nan")
+        print(f"  {table.level[i]:5d} {table.excitation[i]:11.4g} "
+              f"{table.response_amplitude[i]:11.4g} {table.mode[i]:4d} {f:12.5f} {s_f:8.2g} "
+              f"{table.zeta[i]:9.6f} {s_z:8.2g} {100 * x['x_fit_error'][i]:8.3g} "
+              f"{x['x_mac'][i]:6.4f}")
+    for w in table.warnings:
+        print(f"warning: {w}")
+
+
+def _print_set(name, fit, band):
+    s, res = fit.frfset, fit.result
+    lo, hi = res.band_hz
+    held = f", {fit.control} control, held {s.excitation:g}" if s.excitation is not None else ""
+    print(f"{name}: {len(s.points)} point(s), {fit.quantity}, {lo:g}-{hi:g} Hz{held}, "
           f"{len(res.modes)} mode(s), fit error {100 * res.fit_error:.3g} %")
-    head = f"  {'mode':>4} {'frequency_hz':>13} {'omega2':>13} {'zeta':>10} {'stable':>6}"
+    head = (f"  {'mode':>4} {'frequency_hz':>13} {'omega2':>13} {'zeta':>10} {'std_zeta':>9} "
+            f"{'stable':>6}")
     if len(s.points) > 1:
         head += "  shape (" + " ".join(s.points) + ")"
     print(head)
     for i, m in enumerate(res.modes, start=1):
         line = (f"  {i:4d} {m.frequency_hz:13.6f} {m.omega2:13.6e} {m.zeta:10.6f} "
-                f"{m.stability:6.2f}")
+                f"{m.zeta_std:9.2g} {m.stability:6.2f}")
         if len(s.points) > 1:
             line += "  " + " ".join(f"{v.real:+.3f}" for v in _normalized_shape(m.shape))
         print(line)
@@ -172,24 +156,41 @@ def _print_set(name, s, quantity, excitation, res, band):
         A = np.stack([m.shape for m in res.modes], axis=1)
         off = mac(A, A) - np.eye(len(res.modes))
         print(f"  largest off-diagonal auto-MAC: {off.max():.3f}")
+    for i, warns in enumerate(fit.warnings, start=1):
+        for w in warns:
+            print(f"  warning: mode {i}: {w}")
 
 
-def _as_json(files, excitation, results, table):
+def _as_json(files, fits, table):
     sets = []
-    for k, (s, quantity, res) in enumerate(results):
+    for k, fit in enumerate(fits):
+        s, res = fit.frfset, fit.result
         sets.append({
-            "file": files[k], "points": s.points, "quantity": quantity,
-            "excitation": excitation[k], "fit_error": res.fit_error,
+            "file": files[k], "points": s.points, "quantity": fit.quantity,
+            "control": fit.control, "excitation": s.excitation, "run_order": s.run_order,
+            "reference": s.reference, "band_hz": list(res.band_hz),
+            "fit_error": res.fit_error, "residual_correlation": res.residual_correlation,
             "modes": [{"frequency_hz": m.frequency_hz, "omega2": m.omega2, "zeta": m.zeta,
-                       "stability": m.stability,
+                       "omega2_std": m.omega2_std, "zeta_std": m.zeta_std,
+                       "stability": m.stability, "warnings": fit.warnings[i],
                        "shape_re": np.real(m.shape), "shape_im": np.imag(m.shape)}
-                      for m in res.modes]})
+                      for i, m in enumerate(res.modes)]})
     out = {"sets": sets}
     if table is not None:
+        x = table.extra
+
+        def opt(a, i):
+            return None if a is None else a[i]
+
+        out["control"] = str(table.control[0])
         out["levels"] = [{"level": table.level[i], "excitation": table.excitation[i],
+                          "response_amplitude": opt(table.response_amplitude, i),
                           "mode": table.mode[i], "omega2": table.omega2[i],
-                          "zeta": table.zeta[i], "run_order": table.run_order[i],
-                          "frequency_hz": table.extra["x_frequency_hz"][i],
-                          "mac": table.extra["x_mac"][i], "file": table.extra["x_source"][i]}
+                          "omega2_std": opt(table.omega2_std, i), "zeta": table.zeta[i],
+                          "zeta_std": opt(table.zeta_std, i), "run_order": table.run_order[i],
+                          "frequency_hz": x["x_frequency_hz"][i], "mac": x["x_mac"][i],
+                          "fit_error": x["x_fit_error"][i], "file": x["x_source"][i],
+                          "warnings": [w for w in str(x["x_warning"][i]).split(" | ") if w]}
                          for i in np.lexsort((table.level, table.mode))]
+        out["data_warnings"] = table.warnings
     return out

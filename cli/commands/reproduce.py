@@ -58,14 +58,19 @@ def register(subparsers) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--protocol", choices=("default", "newmark", "paper"), default="default",
                         help="default: harmonic balance + continuation (seconds); newmark: "
-                             "time integration until periodic, state carried between lines; "
-                             "paper: Newmark 9 s + 1 s per line from rest (hours)")
+                             "time integration until periodic (lumped: state carried between "
+                             "lines; double-beam: every line started on its harmonic-balance "
+                             "orbit, then both runs identified and compared per level); "
+                             "paper (lumped only): Newmark 9 s + 1 s per line from rest (hours)")
     parser.add_argument("--n-sliders", type=int, default=100,
                         help="Jenkins elements per Iwan joint")
     parser.add_argument("--bands-only", action="store_true",
                         help="only the lines of the identification bands of modes 2, 4, 6")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_executor_arguments(parser)     # --workers/--scheduler/--executor: where levels run
+    parser.add_argument("--control", choices=("force", "response"), default="force",
+                        help="response: each level holds the drive-point amplitude "
+                             "(cases.response_study; iwanfe backbone)")
     db = parser.add_argument_group("double-beam only")
     db.add_argument("--data", default=argparse.SUPPRESS, metavar="FILE",
                     help="measured-data CSV (default: the shipped paper data)")
@@ -88,6 +93,10 @@ def register(subparsers) -> None:
                     help="line spacing, Hz (default 0.5; the paper stepped 2 Hz)")
     db.add_argument("--sliders-per-octave", type=int, default=argparse.SUPPRESS,
                     help="Jenkins sliders per octave of slip limit (default 16)")
+    db.add_argument("--glue-kt", type=float, default=argparse.SUPPRESS, metavar="N_PER_M",
+                    help="stuck tangential stiffness K_T of the whole glue, 1e6..1e11 N/m "
+                         "(default 1e8, assumed); the clamp grip is re-calibrated so that the "
+                         "measured mode stays at 252.0 Hz")
     db.add_argument("--no-weak-joint-runs", action="store_true", default=argparse.SUPPRESS,
                     help="skip the two reruns with R/10 and R/100 (estimator recovery)")
     parser.set_defaults(func=run)
@@ -147,7 +156,7 @@ def _lumped_text(rep, files) -> str:
 
 
 _DOUBLE_BEAM_ONLY = ("data", "fit_levels", "force_scale", "beta", "chi", "R_joint", "band", "df",
-                     "sliders_per_octave", "no_weak_joint_runs")
+                     "sliders_per_octave", "no_weak_joint_runs", "glue_kt")
 
 
 def _run_lumped(args) -> int:
@@ -205,9 +214,9 @@ def _run_lumped(args) -> int:
 def _double_beam_study(args):
     from cases.double_beam.settings import DoubleBeamStudy
 
-    if args.protocol != "default":
-        raise ValueError("--protocol applies to the lumped target only (double-beam uses "
-                         "harmonic balance)")
+    if args.protocol == "paper":
+        raise ValueError("--protocol paper applies to the lumped target only (double-beam: "
+                         "default or newmark)")
     if args.bands_only:
         raise ValueError("--bands-only applies to the lumped target only")
     if args.n_sliders != 100:
@@ -236,10 +245,19 @@ def _double_beam_study(args):
 def _double_beam_text(rep, files, wall) -> str:
     from cases.double_beam.statements import headline
 
+    solver = "harmonic balance" if rep.protocol == "hb" else "Newmark time integration"
     lines = ["Double beam (paper section 4): FE model + Iwan glue joints, "
-             f"{rep.campaign.force.size} levels x {rep.campaign.frequency_hz.size} lines", ""]
+             f"{rep.campaign.force.size} levels x {rep.campaign.frequency_hz.size} lines "
+             f"({solver})"]
+    if rep.calibration is not None:
+        lines.append(f"Model: {rep.calibration['statement']}")
+    lines.append("")
     lines += [f"- {s}" for s in headline(rep)]
     lines.append("")
+    if rep.protocol_comparison is not None:
+        from cases.double_beam.protocols import comparison_lines
+
+        lines += comparison_lines(rep.protocol_comparison) + [""]
     lines.append(" level  drive V   omega^2 meas   omega^2 sim     diff   zeta meas %  "
                  "zeta sim %      diff %   slip/phi_max")
     for r in rep.comparison():
@@ -272,6 +290,9 @@ def _double_beam_text(rep, files, wall) -> str:
                          + "  ".join(cells))
     lines.append("")
     lines.append(f"Files ({Path(files[0]).parent}): " + ", ".join(Path(f).name for f in files))
+    if "campaign_hb_check" in rep.timings:
+        lines.append(f"Harmonic-balance check run and identified in "
+                     f"{rep.timings['campaign_hb_check']:.1f} s")
     lines.append(f"Wall time {wall:.1f} s (campaign {rep.timings['campaign']:.1f} s, "
                  f"{int(rep.campaign.computed.sum())} of {rep.campaign.force.size} levels "
                  f"computed; weak-joint reruns {rep.timings.get('weak_joint_runs', 0.0):.1f} s)")
@@ -282,16 +303,25 @@ def _run_double_beam(args) -> int:
     from cases.double_beam.files import write_report
     from cases.double_beam.study import run_study
 
+    from cases.double_beam.calibration import calibrated_model
     t0 = time.perf_counter()
     study = _double_beam_study(args)
+    glue_kt = getattr(args, "glue_kt", None)
     executor = executor_from_args(args)
     out = Path(args.out or "results/double-beam")
-    out.mkdir(parents=True, exist_ok=True)
     progress = not args.no_progress
+    model, calibration = calibrated_model(glue_kt)
+    out.mkdir(parents=True, exist_ok=True)
+    protocol = "hb" if args.protocol == "default" else args.protocol
     if progress:
         print(f"iwanfe reproduce double-beam: {study.n_levels} levels x {study.lines.size} "
-              f"lines, store {out}", file=sys.stderr)
-    rep = run_study(study, store=out, progress=progress, executor=executor)
+              f"lines, {calibration.statement()}, store {out}", file=sys.stderr)
+    try:
+        rep = run_study(study, store=out, progress=progress, executor=executor, model=model,
+                        protocol=protocol, calibration=calibration)
+    except RuntimeError as exc:     # no steady state (SteadyStateError), no mode identified
+        print(f"iwanfe: {exc}".splitlines()[0], file=sys.stderr)
+        return 1
     files = write_report(rep, out, t0)
     wall = time.perf_counter() - t0
     if args.json:
@@ -306,4 +336,7 @@ TARGETS = {"lumped": _run_lumped, "double-beam": _run_double_beam}
 
 
 def run(args) -> int:
+    if args.control == "response":
+        from cli.commands.backbone import run_response_control
+        return run_response_control(args)
     return TARGETS[args.target](args)

@@ -1,0 +1,74 @@
+"""Command-line input of a series: one measured-data table or the FRF files of a series.
+
+``iwanfe estimate`` and ``iwanfe diagnose`` take either (:func:`ident.series.load_series`)::
+
+    from cli.series_options import add_series_arguments, series_from_args
+
+    def register(subparsers):
+        p = subparsers.add_parser("estimate", ...)
+        add_series_arguments(p)                 # FILE... and the FRF options
+    def run(args):
+        data = series_from_args(args)           # MeasuredData; InputError on bad input
+
+With FRF files (one per level) the identification runs first, as ``iwanfe identify``
+would: ``--band``, ``--modes``, ``--quantity`` choose it; ``--excitation``,
+``--control``, ``--run-order`` and ``--reference`` override the files' headers.
+"""
+from __future__ import annotations
+
+import sys
+
+from ident.frf_header import CONTROLS
+from ident.poles import QUANTITIES
+from ident.series import load_series
+
+__all__ = ["add_series_arguments", "check_series_args", "series_from_args", "progress_bar"]
+
+
+def add_series_arguments(parser, required: bool = True, files_help: str | None = None) -> None:
+    """Add ``FILE...`` and the options of a series given as FRF files."""
+    parser.add_argument("files", metavar="FILE", nargs="+" if required else "*",
+                        help=files_help or "a measured-data CSV, or the FRF files of a "
+                        "series (CSV/UFF, one per level; identified first)")
+    group = parser.add_argument_group("FRF files (identification)")
+    group.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), default=None,
+                       help="frequency band [Hz] of the identification (default: all lines)")
+    group.add_argument("--modes", type=int, default=None, metavar="N",
+                       help="modes per level (default: decided by stabilization)")
+    group.add_argument("--quantity", choices=QUANTITIES, default=None,
+                       help="FRF quantity where a file does not say (default receptance)")
+    group.add_argument("--excitation", type=float, nargs="+", default=None, metavar="V",
+                       help="held level of each FRF file, in file order (overrides the files)")
+    group.add_argument("--control", choices=CONTROLS, default=None,
+                       help="what every level held (overrides the files; default force)")
+    group.add_argument("--run-order", type=int, nargs="+", default=None, metavar="K",
+                       help="run order of each FRF file (overrides the files)")
+    group.add_argument("--reference", default=None, metavar="POINT",
+                       help="drive point label (overrides the files)")
+
+
+def progress_bar(n):
+    """A tqdm wrapper for the identification of n FRF files (none for 1-2 files)."""
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover
+        return None
+    return lambda it: tqdm(it, desc="identify", unit="file", file=sys.stderr,
+                           disable=None if n > 2 else True, leave=False)
+
+
+def check_series_args(args) -> None:
+    """ValueError (one line) for a bad ``--modes`` or ``--band``."""
+    if args.modes is not None and args.modes < 1:
+        raise ValueError(f"--modes must be >= 1, got {args.modes}")
+    if args.band is not None and not args.band[0] < args.band[1]:
+        raise ValueError(f"--band needs LO < HI, got {args.band[0]:g} {args.band[1]:g}")
+
+
+def series_from_args(args):
+    """The :class:`ident.modal_data.MeasuredData` the arguments name."""
+    check_series_args(args)
+    return load_series(args.files, band=args.band, n_modes=args.modes, quantity=args.quantity,
+                       excitation=args.excitation, control=args.control,
+                       run_order=args.run_order, reference=args.reference,
+                       progress=progress_bar(len(args.files)))

@@ -1,0 +1,299 @@
+"""First-harmonic balance of many force levels at once: steady states and phase resonance.
+
+The condensed first-harmonic equations of :mod:`fe.harmonic_balance` and
+:mod:`fe.hb_exact` (continuous Iwan joints through their exact describing function,
+:func:`fe.hb_exact._iwan_df`), solved for all force levels of a stepped-sine campaign
+in one vectorized Newton iteration, on a reduced model in modal form (``M = I``, ``K``
+and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds it), where
+``D(w) = diag(a k_r - w^2 + i w c_r)`` is inverted element by element. Besides the
+joints (slips ``S = G q``) the balance carries extra first-harmonic *elements* on
+reduced coordinates ``Z = H q`` (:class:`CubicSpring`, :class:`QuadraticDamper`), and a
+per-level stiffness scale ``a`` (structure and joints alike: ``K -> a K``, joint force
+``-> a`` times). With ``Y = [S; Z]``, ``X = [G; H]`` and the describing-function force
+``N(Y)`` (``a (k_in - K_T + i k_q) S`` for the joints, ``(k_in + i k_q) Z`` for the
+elements)::
+
+    Y = X D^-1 p - X D^-1 X^T N(Y),      q = D^-1 (p - X^T N(Y)).                (1)
+
+:func:`resonance_levels` finds, per level, the phase resonance of one mode ``k`` of the
+basis: the frequency where the modal-filter dynamic stiffness
+``D_k = phi_d F / q_k`` (``phi_d = p_k``, the mode's drive-point value; ``q_k = phi^T M
+x`` is the mode's modal filter, :mod:`ident.modal_filter`) is purely imaginary, i.e.
+``Re q_k = 0``; there ``omega2 = w^2`` and ``zeta = Im D_k / (2 w^2)``: the mode's
+natural frequency and damping ratio at that level as the stepped-sine test sees them
+(for a linear modally damped structure exactly ``omega_k^2`` and its ``zeta``). The
+frequency is found by the secant method on ``Re q_k / |q_k|``, each step a warm-started
+Newton solve of (1). :func:`frf_levels` sweeps frequency lines (natural continuation)
+for simulated FRFs. SI units: rad/s, m, N.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fe.hb_exact import _ExactIwan, _iwan_df
+from fe.reduction import ReducedModel
+
+__all__ = ["CubicSpring", "QuadraticDamper", "ResonanceLevels", "resonance_levels",
+           "frf_levels"]
+
+
+@dataclass(frozen=True)
+class CubicSpring:
+    """Cubic springs ``f = k3 z^3`` on coordinates ``z = rows q``: first harmonic
+    ``k_in = 3/4 k3 A^2`` (exact for one harmonic), ``k_q = 0``.
+
+    rows : (n_e, r); k3 : (n_e,) N/m^3 in the units of ``z``."""
+
+    rows: np.ndarray
+    k3: np.ndarray
+
+    def df(self, A, omega):
+        k_in = 0.75 * self.k3 * A * A
+        z = np.zeros_like(A)
+        return k_in, z, 1.5 * self.k3 * A, z
+
+
+@dataclass(frozen=True)
+class QuadraticDamper:
+    """Quadratic dampers ``f = c2 |z'| z'`` on ``z = rows q``: first harmonic
+    ``k_q = 8 c2 w^2 A / (3 pi)`` (the equivalent viscous damping ``8 c2 w A/(3 pi)``
+    times ``w``), ``k_in = 0``.
+
+    rows : (n_e, r); c2 : (n_e,) N s^2/m^2 in the units of ``z``."""
+
+    rows: np.ndarray
+    c2: np.ndarray
+
+    def df(self, A, omega):
+        c = (8.0 / (3.0 * np.pi)) * self.c2 * omega[:, None] ** 2
+        z = np.zeros_like(A)
+        return z, c * A, z, c + z
+
+
+@dataclass
+class ResonanceLevels:
+    """Per level at phase resonance: ``omega`` (rad/s), ``omega2``, ``zeta``, the slip
+    harmonics ``slip`` (L, n_joints) complex and amplitudes ``slip_amplitude`` (m), the
+    element amplitudes ``element_amplitude`` (L, n_e) and harmonics
+    ``element_harmonics``, reduced response ``q`` (L, r), secant steps and Newton
+    iterations (total)."""
+
+    omega: np.ndarray
+    omega2: np.ndarray
+    zeta: np.ndarray
+    slip: np.ndarray
+    slip_amplitude: np.ndarray
+    element_amplitude: np.ndarray
+    q: np.ndarray
+    secant_steps: int
+    newton_iterations: int
+    element_harmonics: np.ndarray | None = None
+
+
+class _Balance:
+    """The condensed equations (1) of every level (vectorized over levels)."""
+
+    def __init__(self, model: ReducedModel, joints, load, forces, scale, elements):
+        M, K, C = model.M, model.K, model.C
+        r = model.n_reduced
+        off = lambda A: np.abs(A - np.diag(np.diag(A))).max()  # noqa: E731
+        if (off(M) > 1e-12 or off(K) > 1e-9 * np.abs(np.diag(K)).max()
+                or off(C) > 1e-9 * max(np.abs(np.diag(C)).max(), 1e-300)
+                or np.abs(np.diag(M) - 1.0).max() > 1e-10):
+            raise ValueError("the batched first-harmonic balance needs a reduced model in "
+                             "modal form (M = I, K and C diagonal): fe.reduction.ritz_basis")
+        self.k, self.c = np.diag(K).copy(), np.diag(C).copy()
+        self.J = joints if isinstance(joints, _ExactIwan) else _ExactIwan(joints, model.n_joints)
+        if np.any(np.abs(self.J.K_T - model.K_T) > 1e-9 * np.abs(model.K_T)):
+            raise ValueError("joint stiffness does not match the model's K_T")
+        self.elements = list(elements)
+        rows = [np.asarray(model.G, dtype=float)] + [np.atleast_2d(e.rows) for e in self.elements]
+        self.X = np.vstack(rows)                                   # (ny, r)
+        if self.X.shape[1] != r:
+            raise ValueError(f"element rows must have {r} columns")
+        self.nj, self.ny = model.n_joints, self.X.shape[0]
+        self.p = np.asarray(load, dtype=float).reshape(r)
+        self.F = np.atleast_1d(np.asarray(forces, dtype=float))
+        L = self.F.size
+        self.a = np.ones(L) if scale is None else np.broadcast_to(
+            np.asarray(scale, dtype=float), (L,)).copy()
+        self.L = L
+
+    def operator(self, omega):
+        """``R = X D^-1 X^T`` (L, ny, ny), ``Y_lin`` (L, ny), ``1/D`` (L, r)."""
+        Dinv = 1.0 / (self.a[:, None] * self.k[None] - (omega ** 2)[:, None]
+                      + 1j * omega[:, None] * self.c[None])
+        XD = self.X[None] * Dinv[:, None, :]                        # (L, ny, r)
+        R = XD @ self.X.T
+        Ylin = (XD @ self.p) * self.F[:, None]
+        return R, Ylin, Dinv
+
+    def force(self, Y, omega):
+        """``N(Y)`` and its derivatives ``dN/dRe Y``, ``dN/dIm Y`` (each (L, ny))."""
+        A = np.maximum(np.abs(Y), 1e-300)
+        nj = self.nj
+        kin, kq, dkin, dkq = (np.empty_like(A) for _ in range(4))
+        ki, qj, dki, dqj = _iwan_df(self.J, A[:, :nj])        # broadcasts over levels
+        a = self.a[:, None]
+        kin[:, :nj] = a * (ki - self.J.K_T)
+        kq[:, :nj] = a * qj
+        dkin[:, :nj] = a * dki
+        dkq[:, :nj] = a * dqj
+        c = nj
+        for e in self.elements:
+            n = np.atleast_2d(e.rows).shape[0]
+            kin[:, c:c + n], kq[:, c:c + n], dkin[:, c:c + n], dkq[:, c:c + n] = \
+                e.df(A[:, c:c + n], omega)
+            c += n
+        kap = kin + 1j * kq
+        dkap = (dkin + 1j * dkq) / A
+        return kap * Y, kap + Y * dkap * Y.real, 1j * kap + Y * dkap * Y.imag
+
+    def residual(self, Y, R, Ylin, omega):
+        N, dx, dy = self.force(Y, omega)
+        return Y - Ylin + np.einsum("lij,lj->li", R, N), N, dx, dy
+
+    def solve(self, omega, Y, tol, max_iter):
+        """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), with backtracking where a
+        full step would raise the residual (deep macro-slip from a linear guess);
+        returns Y, N, Dinv, iterations."""
+        R, Ylin, Dinv = self.operator(omega)
+        ny = self.ny
+        eye = np.eye(ny)
+        Jac = np.empty((self.L, 2 * ny, 2 * ny))
+        scale = np.maximum(np.abs(Ylin).max(axis=1), 1e-300)
+        res, N, dx, dy = self.residual(Y, R, Ylin, omega)
+        for it in range(1, max_iter + 1):
+            Ra, Rb = R * dx[:, None, :], R * dy[:, None, :]
+            Jac[:, :ny, :ny] = eye + Ra.real
+            Jac[:, :ny, ny:] = Rb.real
+            Jac[:, ny:, :ny] = Ra.imag
+            Jac[:, ny:, ny:] = eye + Rb.imag
+            d = np.linalg.solve(Jac, -np.concatenate([res.real, res.imag], axis=1)[..., None])
+            step = d[:, :ny, 0] + 1j * d[:, ny:, 0]
+            norm = np.linalg.norm(res, axis=1)
+            lam = np.ones(self.L)
+            for _ in range(30):
+                Yt = Y + lam[:, None] * step
+                rt, Nt, dxt, dyt = self.residual(Yt, R, Ylin, omega)
+                bad = np.linalg.norm(rt, axis=1) > norm * (1.0 - 1e-4 * lam) + 1e-300
+                bad &= np.abs(step).max(axis=1) > tol * np.abs(Y).max(axis=1)
+                if not bad.any():
+                    break
+                lam = np.where(bad, 0.5 * lam, lam)
+            Y, res, N, dx, dy = Yt, rt, Nt, dxt, dyt
+            upd = np.abs(step).max(axis=1) / np.maximum(np.abs(Y).max(axis=1), 1e-12 * scale)
+            # converged: the full Newton step is negligible, or within 100 tol and no
+            # step along it lowers the residual any more (round-off floor)
+            if np.all((upd < tol) | ((upd < 100.0 * tol) & (lam < 1.0))):
+                return Y, N, Dinv, it
+        raise RuntimeError(f"first-harmonic balance did not converge at "
+                           f"{np.asarray(omega).max() / (2 * np.pi):.4g} Hz (relative update "
+                           f"{upd.max():.2e} after {max_iter} iterations)")
+
+    def response(self, N, Dinv):
+        """Reduced response ``q = D^-1 (F p - X^T N)`` (L, r)."""
+        return Dinv * (self.F[:, None] * self.p[None] - N @ self.X)
+
+
+def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
+                     scale=None, elements=(), tol: float = 1e-12,
+                     max_secant: int = 40, max_newton: int = 100,
+                     guess: ResonanceLevels | None = None) -> ResonanceLevels:
+    """Phase resonance of basis vector ``mode_index`` at every force level (module
+    docstring, eq. 1).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        Modal form (:func:`fe.reduction.ritz_basis`).
+    joints : IwanParameters or sequence of them (one per joint; ``K_T`` = ``model.K_T``).
+    load : (r,) reduced unit load ``Phi^T f`` (real).
+    forces : (L,) force amplitudes (N).
+    mode_index : int
+        0-based basis vector whose modal filter defines the resonance.
+    scale : (L,) or float, optional
+        Stiffness scale ``a`` per level (default 1).
+    elements : sequence of :class:`CubicSpring` / :class:`QuadraticDamper`
+    tol : float
+        Bound on the relative Newton update and on the relative secant step.
+    guess : ResonanceLevels, optional
+        A previous solution of a nearby problem (same levels and elements): its
+        frequencies and harmonics start the search (the answer is the same to ``tol``).
+
+    Returns
+    -------
+    ResonanceLevels
+    """
+    b = _Balance(model, joints, load, forces, scale, elements)
+    k = int(mode_index)
+    if abs(b.p[k]) == 0.0:
+        raise ValueError(f"the load does not excite basis vector {k}")
+    if guess is not None and guess.q.shape == (b.L, b.p.size) and \
+            guess.element_amplitude.shape[1] == b.ny - b.nj:
+        w0 = guess.omega.copy()
+        Y0 = np.concatenate([guess.slip, guess.element_harmonics], axis=1)
+    else:
+        w0 = np.sqrt(b.a * b.k[k])
+        Y0 = b.operator(w0)[1]
+    Y, N, Dinv, its = b.solve(w0, Y0, tol, max_newton)
+
+    def re_dk(N, Dinv):
+        """``Re D_k`` (rad^2/s^2); ``~ omega_eff^2 - w^2`` near the resonance."""
+        return (b.p[k] * b.F / b.response(N, Dinv)[:, k]).real
+
+    g0 = re_dk(N, Dinv)
+    # first step: w^2 + Re D_k (exact for a linear single mode), then secant steps
+    w1 = np.sqrt(np.maximum(w0 ** 2 + g0, (0.9 * w0) ** 2))
+    w1 = np.where(w1 == w0, w0 * (1.0 - 1e-7), w1)
+    Y1, N, Dinv, it = b.solve(w1, Y, tol, max_newton)
+    its += it
+    g1 = re_dk(N, Dinv)
+    steps = 1
+    for steps in range(2, max_secant + 1):
+        dg = g1 - g0
+        secant = np.where(dg == 0.0, 0.0, -g1 * (w1 - w0) / np.where(dg == 0.0, 1.0, dg))
+        step = np.clip(secant, -0.05 * w1, 0.05 * w1)
+        w0, g0, Y = w1, g1, Y1
+        w1 = w1 + step
+        Y1, N, Dinv, it = b.solve(w1, Y, tol, max_newton)
+        its += it
+        g1 = re_dk(N, Dinv)
+        if np.all(np.abs(step) <= tol * w1):
+            break
+    else:
+        raise RuntimeError(f"phase resonance not found in {max_secant} secant steps")
+    q = b.response(N, Dinv)
+    Dk = b.p[k] * b.F / q[:, k]
+    A = np.abs(Y1)
+    return ResonanceLevels(omega=w1, omega2=w1 ** 2, zeta=Dk.imag / (2.0 * w1 ** 2),
+                           slip=Y1[:, :b.nj], slip_amplitude=A[:, :b.nj],
+                           element_amplitude=A[:, b.nj:], q=q, secant_steps=steps,
+                           newton_iterations=its, element_harmonics=Y1[:, b.nj:])
+
+
+def frf_levels(model: ReducedModel, joints, load, forces, omegas, scale=None,
+               elements=(), tol: float = 1e-12, max_newton: int = 100):
+    """Steady first-harmonic states of every level over the lines ``omegas`` (rad/s,
+    swept in the given order, each line starting from the previous line's solution:
+    natural continuation as in a stepped-sine test).
+
+    Returns
+    -------
+    q : (L, n_lines, r) complex reduced response amplitudes (m per basis unit)
+    slip_amplitude : (L, n_lines, n_joints) (m)
+    """
+    b = _Balance(model, joints, load, forces, scale, elements)
+    omegas = np.asarray(omegas, dtype=float)
+    q = np.empty((b.L, omegas.size, b.p.size), dtype=complex)
+    amp = np.empty((b.L, omegas.size, b.nj))
+    Y = None
+    for i, w in enumerate(omegas):
+        wl = np.full(b.L, w)
+        Y = b.operator(wl)[1] if Y is None else Y
+        Y, N, Dinv, _ = b.solve(wl, Y, tol, max_newton)
+        q[:, i] = b.response(N, Dinv)
+        amp[:, i] = np.abs(Y[:, :b.nj])
+    return q, amp

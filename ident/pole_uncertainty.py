@@ -1,0 +1,103 @@
+"""Standard uncertainty of identified poles from the refinement's least squares.
+
+The refinement (:mod:`ident.refine`) minimizes the weighted misfit
+``r(theta) = W (H - H_fit(theta))`` over the poles ``theta = (sigma_r, omega_d,r)``
+(``lambda_r = -sigma_r + i omega_d,r``; pseudo-modes included), the residues and
+residual terms being solved linearly for every trial (variable projection). Near the
+optimum, with independent line noise of equal variance after weighting, the poles'
+covariance is the Gauss-Newton one (Golub and Pereyra 2003; Pintelon and Schoukens
+2012, eq. 7-41):
+
+    Cov(theta) = s^2 (J^T J)^-1,   s^2 = |r|^2 / (N - n_theta - n_lin),
+
+``J = d r / d theta`` of the *projected* residual (central differences),
+``N = 2 K P`` real residuals (K lines, P points), ``n_lin = P (2 m + 4)`` real linear
+parameters (residues and U, L per point), so the linear parameters' uncertainty is
+accounted for. The residual variance ``s^2`` makes the result independent of the
+weights' scale. Then, by the delta method,
+
+    omega^2 = sigma^2 + omega_d^2:  d omega^2 = 2 sigma d sigma + 2 omega_d d omega_d,
+    zeta = sigma / omega_n:         d zeta = (omega_d^2 d sigma - sigma omega_d d omega_d)
+                                             / omega_n^3.
+
+Only noise is counted: a model that cannot follow the data (a force-controlled FRF
+distorted by the joint, a missed mode) biases the poles by more than this; the band
+check of :mod:`ident.fit_quality` looks for that. Checked against a Monte Carlo over
+noise realizations in ``tests/test_series_identify.py``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ident.lsfd import lsfd
+
+
+def pole_covariance(freq_hz, frf, poles, weights=None) -> np.ndarray:
+    """Covariance (2m, 2m) of ``(sigma_1..m, omega_d,1..m)`` of all ``poles`` (rad/s).
+
+    Parameters
+    ----------
+    freq_hz : (K,) Hz.  frf : (K, P) complex FRFs the poles were fitted to.
+    poles : (m,) complex, every pole of the fit (modes and pseudo-modes).
+    weights : (K, P) weights of the fit, or None (uniform).
+
+    Returns NaN entries where the Jacobian is not finite or there are no residual degrees
+    of freedom; a singular direction (a pseudo-mode that the residual terms can mimic)
+    is left out by a pseudo-inverse."""
+    poles = np.asarray(poles, complex)
+    frf = np.asarray(frf)
+    if frf.ndim == 1:
+        frf = frf[:, None]
+    m = poles.size
+    K, P = frf.shape
+
+    def resid(sigma, wd):
+        r = lsfd(freq_hz, frf, -sigma + 1j * wd, weights)[2]
+        return np.concatenate([r.real.ravel(), r.imag.ravel()])
+
+    sigma, wd = -poles.real, poles.imag
+    r0 = resid(sigma, wd)
+    J = np.empty((r0.size, 2 * m))
+    for k in range(2 * m):
+        i = k % m
+        h = 1e-6 * max(abs(poles[i]), 1e-300)
+        step = np.zeros(m)
+        step[i] = h
+        if k < m:
+            J[:, k] = (resid(sigma + step, wd) - resid(sigma - step, wd)) / (2 * h)
+        else:
+            J[:, k] = (resid(sigma, wd + step) - resid(sigma, wd - step)) / (2 * h)
+    dof = 2 * K * P - 2 * m - P * (2 * m + 4)
+    if dof <= 0:
+        return np.full((2 * m, 2 * m), np.nan)
+    s2 = float(r0 @ r0) / dof
+    c = np.linalg.norm(J, axis=0)
+    # a pseudo-mode parked far outside the band (near 0 Hz) moves nothing: its columns
+    # are dropped (held fixed) and the pseudo-inverse ignores what the residual terms
+    # can mimic, so neither voids the modes' uncertainty
+    use = np.isfinite(c) & (c > 0) & np.all(np.isfinite(J), axis=0)
+    cov = np.full((2 * m, 2 * m), np.nan)
+    Js = J[:, use] / c[use]
+    cov[np.ix_(use, use)] = (s2 * np.linalg.pinv(Js.T @ Js, rcond=1e-12, hermitian=True)
+                             / np.outer(c[use], c[use]))
+    return cov
+
+
+def modal_std(poles, cov) -> tuple[np.ndarray, np.ndarray]:
+    """Standard uncertainties of ``omega^2`` (rad^2/s^2) and ``zeta`` of the first
+    ``len(poles)`` poles from the covariance of :func:`pole_covariance` (delta method,
+    module doc)."""
+    poles = np.asarray(poles, complex)
+    m = poles.size
+    n = cov.shape[0] // 2
+    sigma, wd = -poles.real, poles.imag
+    wn = np.abs(poles)
+    s_w2, s_z = np.empty(m), np.empty(m)
+    for i in range(m):
+        idx = [i, n + i]
+        C = cov[np.ix_(idx, idx)]
+        g_w2 = np.array([2 * sigma[i], 2 * wd[i]])
+        g_z = np.array([wd[i] ** 2, -sigma[i] * wd[i]]) / wn[i] ** 3
+        s_w2[i] = np.sqrt(max(g_w2 @ C @ g_w2, 0.0)) if np.all(np.isfinite(C)) else np.nan
+        s_z[i] = np.sqrt(max(g_z @ C @ g_z, 0.0)) if np.all(np.isfinite(C)) else np.nan
+    return s_w2, s_z

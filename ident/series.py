@@ -1,0 +1,150 @@
+"""A stepped-sine series from its FRF files: identification of every level, loading.
+
+``shared/spec/measured-data.md``, "FRF files of a stepped-sine series". Each file is one
+level (:mod:`ident.frf_files`; its header says what the level held, ``control``,
+``run_order``, the drive point). :func:`identify_series` identifies every level
+(:func:`ident.identify.identify`) and then makes the levels agree on the number of
+modes in the band (:func:`ident.tracking.agree_on_modes`: two poles on one resonance
+become one; a level with more modes than most levels is identified again with the
+common number; the level's warnings say so). Each mode gets the warnings of
+:mod:`ident.fit_quality` (fit error, stability, band sensitivity).
+:func:`ident.series_table.series_table` turns the levels into the measured-data table.
+:func:`load_series` reads either a measured-data table or the FRF files of a series
+(identified first): the input of ``iwanfe estimate`` and ``iwanfe diagnose``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ident.errors import InputError
+from ident.fit_quality import band_shift, mode_warnings
+from ident.frf_files import FRFSet, read_frf
+from ident.frf_header import with_overrides
+from ident.identify import identify
+from ident.modal_data import MeasuredData
+from ident.series_table import series_table
+from ident.tracking import agree_on_modes
+
+
+@dataclass
+class LevelFit:
+    """One level of a series: its FRF set, what it held and its identification."""
+
+    frfset: FRFSet
+    quantity: str
+    control: str
+    result: object                       # ident.identify.Identification
+    warnings: list = field(default_factory=list)   # per mode: list of str
+
+    @property
+    def held(self) -> float | None:
+        return self.frfset.excitation
+
+
+def _identify(s: FRFSet, quantity, band, n_modes, options):
+    try:
+        return identify(s.freq_hz, s.frf, band=band, n_modes=n_modes, quantity=quantity,
+                        **options)
+    except ValueError as exc:
+        raise InputError(f"{s.source or 'FRF set'}: {exc}") from None
+
+
+def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
+                    progress=None, check_band=True) -> list[LevelFit]:
+    """Identify every FRF set of a series (module doc).
+
+    Parameters
+    ----------
+    sets : list of FRFSet (one per level; header values already final).
+    band : (lo, hi) Hz or None.   n_modes : modes per level or None (automatic).
+    quantity : FRF quantity where a file does not state it (default receptance).
+    options : further keyword arguments of :func:`ident.identify.identify`.
+    progress : optional wrapper of an iterable (a progress bar).
+    check_band : run the band-sensitivity check (one more identification per mode).
+    """
+    options = dict(options or {})
+    fits = []
+    iterator = progress(sets) if progress is not None else sets
+    for s in iterator:
+        q = s.quantity or quantity or "receptance"
+        if s.quantity and quantity and s.quantity != quantity:
+            raise InputError(f"{s.source}: the file holds {s.quantity}, --quantity says "
+                             f"{quantity}")
+        fits.append(LevelFit(s, q, s.control or "force",
+                             _identify(s, q, band, n_modes, options)))
+    notes = [[] for _ in fits]
+    if n_modes is None:
+        def refit(k, n):
+            return _identify(fits[k].frfset, fits[k].quantity, band, n, options)
+
+        results, notes = agree_on_modes([f.result for f in fits], refit)
+        for f, res in zip(fits, results):
+            f.result = res
+    for k, f in enumerate(fits):
+        s = f.frfset
+        f.warnings = [notes[k] + mode_warnings(
+            f.result, i, band_shift(s.freq_hz, s.frf, f.quantity, f.result, i, options)
+            if check_band else None) for i in range(len(f.result.modes))]
+    return fits
+
+
+def is_frf_file(path) -> bool:
+    """True for a universal file or a CSV whose first line is a ``#`` header or
+    ``freq_hz``; False for a measured-data table."""
+    path = Path(path)
+    if path.suffix.lower() in (".uff", ".unv", ".uf"):
+        return True
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as fh:
+            for line in fh:
+                if line.strip():
+                    first = line.strip()
+                    return first == "-1" or first.startswith("#") or first.startswith("freq_hz")
+    except OSError as exc:
+        raise InputError(f"{path}: {exc.strerror or exc}") from None
+    return False
+
+
+def read_series_sets(paths, excitation=None, control=None, run_order=None, reference=None):
+    """The FRF sets of a series with command-line values overriding the files'
+    (``excitation``, ``run_order``: one per file; ``control``, ``reference``: one)."""
+    paths = [str(p) for p in paths]
+    for name, values in (("--excitation", excitation), ("--run-order", run_order)):
+        if values is not None and len(values) != len(paths):
+            raise InputError(f"{name} needs one value per FILE: got {len(values)} values "
+                             f"for {len(paths)} files")
+    sets = []
+    for k, p in enumerate(paths):
+        s = read_frf(p)
+        sets.append(with_overrides(
+            s, excitation=None if excitation is None else excitation[k], control=control,
+            run_order=None if run_order is None else run_order[k], reference=reference))
+    return sets
+
+
+def load_series(paths, band=None, n_modes=None, quantity=None, excitation=None,
+                control=None, run_order=None, reference=None, options=None,
+                progress=None) -> MeasuredData:
+    """A measured-data table (one CSV file) or the FRF files of a series (one per level,
+    identified first): the input of ``iwanfe estimate`` and ``iwanfe diagnose``."""
+    from ident.measured import read_measured
+
+    paths = [str(p) for p in paths]
+    if not paths:
+        raise InputError("no input file")
+    frf = [is_frf_file(p) for p in paths]
+    if not any(frf):
+        if len(paths) > 1:
+            raise InputError(f"{paths[1]}: one measured-data table at a time (or the FRF "
+                             "files of one series)")
+        return read_measured(paths[0])
+    if not all(frf):
+        raise InputError(f"{paths[frf.index(False)]}: not an FRF file (the other files are): "
+                         "give either one measured-data table or the FRF files of a series")
+    sets = read_series_sets(paths, excitation, control, run_order, reference)
+    fits = identify_series(sets, band=band, n_modes=n_modes, quantity=quantity,
+                           options=options, progress=progress)
+    return series_table(fits)

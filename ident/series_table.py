@@ -1,0 +1,147 @@
+"""The measured-data table of an identified stepped-sine series.
+
+``shared/spec/measured-data.md``: :func:`series_table` follows the modes of the levels
+of :func:`ident.series.identify_series` across levels (:func:`ident.tracking.track_modes`)
+and writes one row per mode and level:
+
+* force control: ``excitation`` = the held level; ``response_amplitude`` = the
+  identified mode's amplitude at its resonance ``omega_d`` at the drive point,
+  ``|H_r(omega_d)| F``: the mode's own FRF (residue over pole and its conjugate) in the
+  file's quantity (m, m/s or m/s^2 per N) times the measured force there (the ``force``
+  column, interpolated) or else the held level;
+* response control: ``response_amplitude`` = the held level; ``excitation`` = the force
+  at resonance: the ``force`` column at ``omega_d``, else the held level over the
+  measured ``|H(omega_d)|`` (interpolated between lines).
+
+``run_order`` comes from the files (all or none; default the file order),
+``omega2_std``/``zeta_std`` from the identification (:mod:`ident.pole_uncertainty`;
+left out when a level has none), ``x_fit_error`` and ``x_warning`` carry the fit
+warnings through a CSV round trip (:func:`ident.modal_data.annotation_warnings`). A
+track shorter than 4 levels beside longer ones is left out, with a note on the levels
+where it was seen; when no track reaches 4 of 4 or more levels the table is refused
+with the tracks found.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ident.errors import InputError
+from ident.frf_files import FRFSet
+from ident.modal_data import MeasuredData, annotation_warnings
+from ident.poles import modal_receptance
+from ident.tracking import track_modes
+
+MIN_LEVELS = 4
+
+
+def drive_point(s: FRFSet) -> tuple[int, str | None]:
+    """Index of the drive point among the response points, and a note if it is a guess."""
+    if s.reference is not None and s.reference in s.points:
+        return s.points.index(s.reference), None
+    if len(s.points) == 1:
+        return 0, None
+    return 0, (f"drive point {s.reference!r} not among the response points: response "
+               f"amplitude taken at point {s.points[0]}")
+
+
+def mode_frf_at_resonance(mode, point: int, quantity: str) -> float:
+    """``|H_r(omega_d)|`` of one identified mode at a point, in the FRF's quantity per N:
+    its modal receptance (:func:`ident.poles.modal_receptance`) at
+    ``omega_d = Im(lambda)``, times ``omega_d`` (mobility) or ``omega_d^2``
+    (accelerance)."""
+    w = mode.pole.imag
+    h = modal_receptance(mode.pole, np.atleast_1d(mode.shape)[point], w / (2 * np.pi))
+    power = {"receptance": 0, "mobility": 1, "accelerance": 2}[quantity]
+    return float(abs(h[0, 0]) * w ** power)
+
+
+def _amplitudes(f, mode):
+    """(excitation, response_amplitude, note) of one mode of one level (module doc)."""
+    s = f.frfset
+    p, note = drive_point(s)
+    f_d = mode.pole.imag / (2 * np.pi)
+    force = None if s.force is None else float(np.interp(f_d, s.freq_hz, s.force))
+    if f.control == "response":
+        if force is None:
+            force = s.excitation / float(np.interp(f_d, s.freq_hz, np.abs(s.frf[:, p])))
+        return force, s.excitation, note
+    amp = mode_frf_at_resonance(mode, p, f.quantity) * (s.excitation if force is None else force)
+    return s.excitation, amp, note
+
+
+def series_table(fits) -> MeasuredData:
+    """The measured-data table of an identified series (module doc).
+
+    ``fits``: the :class:`ident.series.LevelFit` of every level."""
+    controls = {f.control for f in fits}
+    if len(controls) > 1:
+        raise InputError("the files mix control = force and response; one series has one "
+                         "control (give --control to override the files)")
+    missing = [f.frfset.source for f in fits if f.held is None]
+    if missing:
+        raise InputError(f"{missing[0]}: the level it held is unknown: give --excitation V "
+                         "per file, a CSV line '# excitation = V' or a UFF ID line "
+                         "'excitation=V'")
+    given = [f.frfset.run_order is not None for f in fits]
+    if any(given) and not all(given):
+        raise InputError(f"{fits[given.index(False)].frfset.source}: no run_order while "
+                         "other files state one; give all or none (--run-order)")
+    run_order = (np.array([f.frfset.run_order for f in fits]) if all(given)
+                 else np.arange(1, len(fits) + 1))
+    try:
+        order, rows = track_modes([f.held for f in fits], [f.result.modes for f in fits])
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if not rows:
+        raise InputError("no mode identified at any level")
+    level_of = {int(k): n + 1 for n, k in enumerate(order)}
+    labels = np.array([r[2] for r in rows])
+    n_levels = {lab: int(np.sum(labels == lab)) for lab in set(labels.tolist())}
+    if len(fits) >= MIN_LEVELS and max(n_levels.values()) < MIN_LEVELS:
+        tracks = "; ".join(
+            f"mode {lab}: " + ", ".join(f"level {level_of[k]} {fits[k].result.modes[i].frequency_hz:.5g} Hz"
+                                        for k, i, lb, _ in rows if lb == lab)
+            for lab in sorted(n_levels))
+        raise InputError(f"no mode could be followed over {MIN_LEVELS} of the {len(fits)} "
+                         f"levels (a mode moved by more than 5 % or changed shape, MAC < 0.8, "
+                         f"between levels): {tracks}; identify one mode per level with "
+                         "--band around it and --modes 1")
+    keep = np.array([n_levels[lab] >= MIN_LEVELS or max(n_levels.values()) < MIN_LEVELS
+                     for lab in labels])
+    out = {k: [] for k in ("level", "excitation", "omega2", "zeta", "mode", "response",
+                           "run", "w_std", "z_std", "f", "stab", "mac", "err", "src", "warn")}
+    dropped = [(r, n_levels[r[2]]) for r, ok in zip(rows, keep) if not ok]
+    for (k, i, lab, m), ok in zip(rows, keep):
+        if not ok:
+            continue
+        f = fits[k]
+        mode = f.result.modes[i]
+        exc, amp, note = _amplitudes(f, mode)
+        warn = list(f.warnings[i]) + ([note] if note else [])
+        warn += [f"a pole at {fits[kk].result.modes[ii].frequency_hz:.6g} Hz seen at "
+                 f"{n} level(s) only was left out" for (kk, ii, _, _), n in dropped if kk == k]
+        for key, v in zip(out, (level_of[k], exc, mode.omega2, mode.zeta, lab, amp,
+                                run_order[k], mode.omega2_std, mode.zeta_std,
+                                mode.frequency_hz, mode.stability, m, f.result.fit_error,
+                                Path(f.frfset.source).name, " | ".join(warn))):
+            out[key].append(v)
+    stds = np.array([out["w_std"], out["z_std"]], float)
+    has_std = bool(np.all(np.isfinite(stds) & (stds > 0)))
+    control = fits[0].control
+    data = MeasuredData(
+        level=out["level"], excitation=out["excitation"], omega2=out["omega2"],
+        zeta=out["zeta"], mode=out["mode"], run_order=out["run"],
+        response_amplitude=out["response"], omega2_std=stds[0] if has_std else None,
+        zeta_std=stds[1] if has_std else None, control=[control] * len(out["level"]),
+        extra={"x_frequency_hz": np.array(out["f"]), "x_stability": np.array(out["stab"]),
+               "x_mac": np.array(out["mac"], float), "x_fit_error": np.array(out["err"]),
+               "x_source": np.array(out["src"], dtype=str),
+               "x_warning": np.array(out["warn"], dtype=str)},
+        source="FRF series")
+    data.warnings = annotation_warnings(data)
+    if not has_std:
+        data.warnings.append("FRF series: no identification uncertainty at some level: "
+                             "omega2_std and zeta_std left out")
+    return data

@@ -1,0 +1,234 @@
+"""Model updating: a simulator's parameters fitted to measured omega^2 and zeta per level.
+
+The simulator is any callable ``simulate(values) -> (omega2, zeta)`` giving the natural
+frequency squared (rad^2/s^2) and damping ratio of one mode at every level of a test
+series (e.g. the nonlinear FE double beam, :mod:`cases.double_beam.fe_levels`); the
+parameters are named, bounded scalars (:class:`Parameter`). The fit is weighted least
+squares, i.e. Gaussian maximum likelihood with known noise levels
+(:class:`NoiseModel`)::
+
+    chi2(theta) = sum_{v in fit} [((omega2_v(theta) - omega2_v) / s_omega2,v)^2
+                                 + ((zeta_v(theta) - zeta_v) / s_zeta,v)^2],        (1)
+
+minimized by :func:`scipy.optimize.least_squares` (trust-region reflective, bounds,
+finite-difference Jacobian in the parameters scaled by their ``step``). A simulator
+that fails (no steady state) returns a large residual, so the optimizer steps back.
+AICc (known noise): ``chi2 + 2k + 2k(k+1)/(n-k-1)`` with ``n`` the number of residuals,
+``k`` the number of fitted parameters.
+
+Noise (:func:`noise_model`): the data's own ``omega2_std`` / ``zeta_std`` columns when
+present (the identification's uncertainty, shared/spec/diagnosis.md); otherwise the
+scatter of the fit levels about a *free* power law per channel, ``y = a + b (e/e_1)^p``
+(three parameters per channel, frequency and damping untied): the most flexible
+monotone amplitude law, independent of the models being compared, so a misfit of the
+physics cannot hide in the noise level (the spec's warning); ``s^2 = RSS/(n - 3)``.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+__all__ = ["Parameter", "NoiseModel", "power_law_noise", "noise_model", "UpdateProblem",
+           "Fit", "fit"]
+
+_FAILED = 1e4   # residual of a failed simulation, in noise units
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A fitted scalar: ``start`` value, bounds, a typical ``step`` (its scale in the
+    optimizer and the profile grids), unit and one-line description."""
+
+    name: str
+    start: float
+    lower: float = -math.inf
+    upper: float = math.inf
+    step: float = 1.0
+    unit: str = ""
+    description: str = ""
+
+
+@dataclass
+class NoiseModel:
+    """Standard deviation of omega2 (rad^2/s^2) and zeta at every level, where it came
+    from (``source``) and its degrees of freedom (None when given by the data)."""
+
+    sigma_omega2: np.ndarray
+    sigma_zeta: np.ndarray
+    source: str
+    dof: int | None = None
+
+    def to_dict(self) -> dict:
+        return {"sigma_omega2": self.sigma_omega2, "sigma_zeta": self.sigma_zeta,
+                "source": self.source, "dof": self.dof}
+
+
+def _free_power_law_rss(x, y):
+    """RSS of ``y = a + b x^p`` (``x = e/e_1 >= 1``) over ``p`` in (0, 3]; linear in
+    ``a, b`` for each ``p`` (variable projection on a fine grid of ``p``)."""
+    best = math.inf
+    for p in np.linspace(0.02, 3.0, 299):
+        A = np.column_stack([np.ones_like(x), x ** p])
+        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+        best = min(best, float(np.sum((A @ coef - y) ** 2)))
+    return best
+
+
+def power_law_noise(excitation, omega2, zeta, mask) -> NoiseModel:
+    """Noise of the levels ``mask`` from their scatter about a free power law per
+    channel (module docstring); needs at least 5 levels."""
+    m = np.asarray(mask, dtype=bool)
+    n = int(m.sum())
+    if n < 5:
+        raise ValueError(f"the noise level needs at least 5 fit levels, got {n}")
+    e = np.asarray(excitation, dtype=float)
+    x = e[m] / e[m].min()
+    L = e.size
+    s_w = math.sqrt(_free_power_law_rss(x, np.asarray(omega2, float)[m]) / (n - 3))
+    s_z = math.sqrt(_free_power_law_rss(x, np.asarray(zeta, float)[m]) / (n - 3))
+    s_w = max(s_w, 1e-9 * float(np.mean(omega2)))
+    s_z = max(s_z, 1e-9)
+    return NoiseModel(np.full(L, s_w), np.full(L, s_z),
+                      f"scatter of the {n} fit levels about a free power law per channel "
+                      f"(y = a + b (e/e1)^p, 3 parameters each)", dof=n - 3)
+
+
+def noise_model(data, mask) -> NoiseModel:
+    """The data's ``omega2_std``/``zeta_std`` columns if present, else
+    :func:`power_law_noise` of the fit levels ``mask``."""
+    if data.omega2_std is not None and data.zeta_std is not None:
+        return NoiseModel(np.asarray(data.omega2_std, float), np.asarray(data.zeta_std, float),
+                          "the data's omega2_std and zeta_std columns")
+    return power_law_noise(data.excitation, data.omega2, data.zeta, mask)
+
+
+@dataclass
+class UpdateProblem:
+    """Observed levels, their noise, which levels are fitted, the parameters, the
+    simulator ``simulate(values: dict) -> (omega2 (L,), zeta (L,))`` and optionally
+    ``describe(values) -> dict``, the figures to keep for a parameter set (e.g. its
+    predictions; :mod:`inverse.profile` stores them with every profile point)."""
+
+    simulate: object
+    omega2: np.ndarray
+    zeta: np.ndarray
+    noise: NoiseModel
+    fit_mask: np.ndarray
+    parameters: dict
+    fixed: dict = field(default_factory=dict)
+    describe: object = None
+
+    def residuals(self, values: dict, mask=None) -> np.ndarray:
+        """Eq. (1)'s residual vector on ``mask`` (default the fit levels)."""
+        m = self.fit_mask if mask is None else np.asarray(mask, dtype=bool)
+        try:
+            om2, ze = self.simulate(values)
+        except (RuntimeError, ValueError, ArithmeticError):
+            return np.full(2 * int(m.sum()), _FAILED)
+        r = np.concatenate([(om2[m] - self.omega2[m]) / self.noise.sigma_omega2[m],
+                            (ze[m] - self.zeta[m]) / self.noise.sigma_zeta[m]])
+        return np.where(np.isfinite(r), r, _FAILED)
+
+
+@dataclass
+class Fit:
+    """A fitted parameter set: ``values`` (every parameter, fixed ones included),
+    ``free`` names, ``chi2`` (eq. 1), ``n`` residuals, ``cov`` (covariance of the free
+    parameters from the Jacobian, ``(J^T J)^-1``, or None), evaluations, seconds."""
+
+    values: dict
+    free: tuple
+    chi2: float
+    n: int
+    cov: np.ndarray | None
+    nfev: int
+    seconds: float
+    success: bool
+    message: str = ""
+
+    @property
+    def k(self) -> int:
+        return len(self.free)
+
+    @property
+    def dof(self) -> int:
+        return self.n - self.k
+
+    @property
+    def aicc(self) -> float:
+        k, n = self.k, self.n
+        return self.chi2 + 2 * k + (2 * k * (k + 1) / (n - k - 1) if n - k - 1 > 0 else math.inf)
+
+    @property
+    def misfit_scale(self) -> float:
+        """``max(1, chi2/dof)``: how much larger than the noise the misfit is."""
+        return max(1.0, self.chi2 / self.dof) if self.dof > 0 else 1.0
+
+    def std_error(self, name: str) -> float:
+        """Linearized standard error of a free parameter, scaled by the misfit."""
+        if self.cov is None or name not in self.free:
+            return math.nan
+        i = self.free.index(name)
+        return math.sqrt(max(self.cov[i, i], 0.0) * self.misfit_scale)
+
+    def to_dict(self) -> dict:
+        return {"values": dict(self.values), "free": list(self.free), "chi2": self.chi2,
+                "n_residuals": self.n, "dof": self.dof, "aicc": self.aicc,
+                "misfit_scale": self.misfit_scale, "evaluations": self.nfev,
+                "seconds": self.seconds, "success": self.success,
+                "std_error": {f: self.std_error(f) for f in self.free}}
+
+
+def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | None = None,
+        max_nfev: int = 200, mask=None, tol: float = 1e-8) -> Fit:
+    """Minimize eq. (1) over the ``free`` parameters from ``start`` (default: each
+    parameter's ``start``), the others held at ``fixed`` / ``problem.fixed`` / start;
+    ``tol``: the optimizer's ``xtol``, ``ftol`` and ``gtol``.
+
+    Returns
+    -------
+    Fit
+    """
+    t0 = time.perf_counter()
+    free = tuple(free)
+    pars = [problem.parameters[f] for f in free]
+    values = {name: p.start for name, p in problem.parameters.items()}
+    values.update(problem.fixed)
+    if start:
+        values.update(start)
+    if fixed:
+        values.update(fixed)
+    x0 = np.array([min(max(values[f], p.lower), p.upper) for f, p in zip(free, pars)])
+    step = np.array([p.step for p in pars])
+    lo = np.array([(p.lower - x) / s for p, x, s in zip(pars, x0, step)])
+    hi = np.array([(p.upper - x) / s for p, x, s in zip(pars, x0, step)])
+    u0 = np.zeros(len(free))
+
+    def at(u):
+        v = dict(values)
+        v.update({f: float(x + s * ui) for f, x, s, ui in zip(free, x0, step, u)})
+        return v
+
+    def fun(u):
+        return problem.residuals(at(u), mask)
+
+    if not free:
+        r = fun(u0)
+        return Fit(values=values, free=free, chi2=float(r @ r), n=r.size, cov=None, nfev=1,
+                   seconds=time.perf_counter() - t0, success=True)
+    res = least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-6,
+                        x_scale=1.0, max_nfev=max_nfev, xtol=tol, ftol=tol, gtol=tol)
+    J = res.jac / step[None, :]
+    try:
+        cov = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        cov = None
+    r = res.fun
+    return Fit(values=at(res.x), free=free, chi2=float(r @ r), n=r.size, cov=cov,
+               nfev=int(res.nfev), seconds=time.perf_counter() - t0,
+               success=bool(res.success) and bool(np.all(np.abs(r) < _FAILED)),
+               message=str(res.message))

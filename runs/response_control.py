@@ -1,0 +1,183 @@
+"""Response-controlled stepped sine: each level holds the drive-point response amplitude.
+
+Phase-resonance and response-controlled testing hold the response, not the force: at
+every line of a level the force amplitude ``F`` is adjusted until the first harmonic of
+the response at the control DOF ``d`` has the held amplitude ``A``. Along the lines of a
+level the joints then see (nearly) one amplitude, so each level's FRF is that of the
+structure linearized at one amplitude and a linear modal fit of it gives a point of the
+backbone (``control = response`` in ``shared/spec/measured-data.md``).
+
+At one line ``w`` the condensed harmonic balance of :mod:`fe.harmonic_balance`
+(``S_h = F S_h^lin - R_h G_h(S)``, with ``S^lin`` the linear slips per newton of the
+load pattern) gets one more unknown, ``F``, and one more equation,
+
+    |X_d|^2 = A^2,   X_d = F x_d^lin - (D_1^{-1} G^T)_d G_1(S),
+
+solved together by Newton's method with the exact Jacobian (the joints through either
+path of :mod:`fe.joint_harmonics`). Lines are followed by the secant continuation of
+:func:`fe.harmonic_balance.natural_continuation`. :class:`ResponseControlProtocol` plugs
+this into :func:`runs.stepped_sine.run_campaign` (store, resume, executors): the
+campaign's ``force`` column holds the held amplitudes (m), the level's receptance is
+``X / F`` per line, and the force of each line is ``A / |receptance at d|``
+(:func:`line_forces`).
+
+SI units: rad/s, m, N.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fe.harmonic_balance import HBOperator, HBSettings, HBSolution, natural_continuation
+from fe.joint_harmonics import joint_path
+from fe.reduction import ReducedModel
+from joints.iwan import IwanParameters
+
+__all__ = ["ControlledSolution", "solve_response_controlled", "ResponseControlProtocol",
+           "line_forces"]
+
+
+@dataclass
+class ControlledSolution(HBSolution):
+    """:class:`fe.harmonic_balance.HBSolution` plus the force amplitude ``force`` (N) that
+    holds the response."""
+
+    force: float = float("nan")
+
+
+def solve_response_controlled(model: ReducedModel, joints, load, omega: float, control,
+                              amplitude: float, guess=None, tol: float = 1e-10,
+                              max_iter: int = 60) -> ControlledSolution:
+    """Steady state at ``omega`` whose first harmonic ``control @ Q_1`` has modulus
+    ``amplitude`` (module docstring).
+
+    Parameters
+    ----------
+    model : ReducedModel
+    joints : fe.joint_harmonics.BankHarmonics or ExactHarmonics
+    load : (r,) reduced load pattern per newton.
+    omega : float, rad/s.
+    control : (r,) row giving the controlled displacement ``control @ q`` (e.g. a row of
+        the basis: a physical DOF).
+    amplitude : float, held amplitude (m).
+    guess : (n_h, n_joints) complex slip harmonics, optional (default: the linear
+        response scaled to the held amplitude).
+    """
+    A = float(amplitude)
+    if not A > 0:
+        raise ValueError(f"held amplitude must be > 0, got {amplitude!r}")
+    h = np.asarray(joints.harmonics)
+    op = HBOperator(model, load, omega, None, harmonics=h)
+    nc, nj = op.nc, op.nj
+    i1 = int(np.flatnonzero(h == 1)[0])
+    x_lin = complex(control @ op.Xp[i1])
+    x_g = control @ op.XG[i1]                                    # (nj,)
+    eye = np.eye(nc * nj)
+
+    def evaluate(y):
+        Gh, Jg, amp = joints(y.reshape(nc, nj))
+        return Gh, Jg, amp, Gh[2 * i1] + 1j * Gh[2 * i1 + 1]
+
+    if guess is None:
+        F = A / abs(x_lin)
+        y = F * op.y_lin
+    else:
+        g = np.asarray(guess, dtype=complex).reshape(h.size, nj)
+        y = np.empty((nc, nj))
+        y[0::2], y[1::2] = g.real, g.imag
+        y = y.reshape(-1)
+        Gh = evaluate(y)[0]
+        F = float(op.y_lin @ (y + op.Rr @ Gh.reshape(-1)) / (op.y_lin @ op.y_lin))
+    scale = max(np.abs(op.y_lin).max() * A / abs(x_lin), 1e-300)
+    upd = np.inf
+    for it in range(1, max_iter + 1):
+        Gh, Jg, amp, N1 = evaluate(y)
+        X = F * x_lin - x_g @ N1
+        res = np.empty(nc * nj + 1)
+        res[:-1] = y - F * op.y_lin + op.Rr @ Gh.reshape(-1)
+        res[-1] = 0.5 * (abs(X) ** 2 / A ** 2 - 1.0)
+        Jac = np.empty((nc * nj + 1, nc * nj + 1))
+        Jac[:-1, :-1] = eye + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(nc * nj, nc * nj)
+        Jac[:-1, -1] = -op.y_lin
+        dN1 = Jg[:, 2 * i1, :] + 1j * Jg[:, 2 * i1 + 1, :]           # (nj, nc): dN1_l/dY[d, l]
+        dX = -(x_g[:, None] * dN1).T                                   # (nc, nj)
+        Jac[-1, :-1] = (np.conj(X) * dX).real.reshape(-1) / A ** 2
+        Jac[-1, -1] = (np.conj(X) * x_lin).real / A ** 2
+        d = np.linalg.solve(Jac, -res)
+        y, F = y + d[:-1], F + d[-1]
+        upd = max(np.abs(d[:-1]).max() / max(np.abs(y).max(), scale * 1e-12),
+                  abs(d[-1]) / max(abs(F), 1e-300))
+        if upd < tol:
+            break
+    else:
+        raise RuntimeError(f"response-controlled balance did not converge at "
+                           f"{omega / (2 * np.pi):.4g} Hz (relative update {upd:.2e})")
+    if F < 0:              # the mirror solution (odd joints): same receptance, F > 0
+        y, F = -y, -F
+    Gh, _, amp, _ = evaluate(y)
+    Y = y.reshape(nc, nj)
+    S, Nh = Y[0::2] + 1j * Y[1::2], Gh[0::2] + 1j * Gh[1::2]
+    q = -np.einsum("hrj,hj->hr", op.XG, Nh)
+    q[i1] += F * op.Xp[i1]
+    return ControlledSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Nh, q=q,
+                              slip_amplitude=amp, iterations=it, residual=float(upd),
+                              force=float(F))
+
+
+@dataclass(frozen=True)
+class ResponseControlProtocol:
+    """Response control at physical DOF ``dof`` for :func:`runs.stepped_sine.run_campaign`
+    (the campaign's ``force`` holds the held amplitudes, m).
+
+    ``path``: ``"bank"`` (the campaign's Jenkins banks, harmonics and AFT samples of
+    ``settings``) or ``"exact"`` (first harmonic, continuous Iwan joints ``exact_joints``:
+    one ``(chi, K_T, F_S, beta)`` per joint).
+    """
+
+    dof: int
+    path: str = "bank"
+    settings: HBSettings = field(default_factory=HBSettings)
+    exact_joints: tuple = ()
+    name: str = "response"
+
+    @classmethod
+    def exact(cls, dof: int, joints, settings: HBSettings = HBSettings()):
+        """The exact path with ``joints`` (sequence of IwanParameters)."""
+        return cls(int(dof), "exact", settings,
+                   tuple((p.chi, p.K_T, p.F_S, p.beta) for p in joints))
+
+    def joint_harmonics(self, bank):
+        if self.path == "exact":
+            joints = [IwanParameters(*row) for row in self.exact_joints]
+            return joint_path("exact", joints=joints, n_joints=len(joints))
+        return joint_path(self.path, bank=bank, harmonics=self.settings.harmonics,
+                          n_time=self.settings.n_time)
+
+    def run_level(self, model: ReducedModel, bank, campaign, amplitude: float, tick=None):
+        """One level at held ``amplitude`` (m) over the campaign's lines: the level runner
+        of :func:`runs.stepped_sine.run_level` (receptance, first-harmonic slips, slip
+        amplitudes, Newton iterations per line)."""
+        joints = self.joint_harmonics(bank)
+        load = model.load(campaign.load)
+        control = np.asarray(model.basis[int(self.dof)], dtype=float)
+        s = self.settings
+        sols = natural_continuation(
+            lambda w, guess: solve_response_controlled(model, joints, load, w, control,
+                                                       amplitude, guess, s.tol, s.max_iter),
+            2 * np.pi * campaign.frequency_hz, tick)
+        rec = np.array([x.first_harmonic(model)[campaign.outputs] / x.force for x in sols])
+        slip = np.array([x.slip[x.harmonics == 1][0] for x in sols])
+        amp = np.array([x.slip_amplitude for x in sols])
+        work = np.array([x.iterations for x in sols], dtype=float)
+        return rec, slip, amp, work
+
+
+def line_forces(result, campaign) -> np.ndarray:
+    """Force amplitude of every line (n_levels, n_lines) (N) of a response-controlled
+    campaign result: held amplitude over the receptance modulus at the control DOF."""
+    dof = campaign.protocol.dof
+    idx = np.flatnonzero(np.asarray(campaign.outputs) == dof)
+    if idx.size == 0:
+        raise ValueError(f"the control DOF {dof} is not among the campaign's outputs")
+    return campaign.force[:, None] / np.abs(result.receptance[:, :, idx[0]])

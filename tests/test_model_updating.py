@@ -1,0 +1,165 @@
+"""Model updating (inverse/update.py, inverse/profile.py) and the FE double beam by
+parameters (cases/double_beam/fe_levels.py).
+
+Truths: planted parameters of a closed-form simulator (the modal Iwan relations, paper
+eq. 30-32 with eq. 45 corrected) and of the FE simulation itself, planted noise levels,
+and the exact force-scale invariance of the FE model (cases/double_beam/joint_setup.py).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from inverse.profile import linear_grid, run_profiles, threshold
+from inverse.update import NoiseModel, Parameter, UpdateProblem, fit, power_law_noise
+
+EXC = 0.005 * 2.0 ** np.arange(10)
+
+
+def test_power_law_noise_recovers_a_planted_noise_level():
+    rng = np.random.default_rng(3)
+    e = 1.05 ** np.arange(80)
+    x = e / e[0]
+    s_w, s_z = 12.0, 2.5e-6
+    om2 = 2.5e6 - 3.0 * x ** 0.7 + s_w * rng.standard_normal(80)
+    ze = 0.0125 + 2e-7 * x ** 0.9 + s_z * rng.standard_normal(80)
+    n = power_law_noise(e, om2, ze, np.ones(80, dtype=bool))
+    assert n.dof == 77
+    assert abs(n.sigma_omega2[0] / s_w - 1) < 0.2
+    assert abs(n.sigma_zeta[0] / s_z - 1) < 0.2
+
+
+class ModalIwan:
+    """Closed-form levels: ``omega2 = w0^2 - r(chi) dc x^(chi+1)``, ``zeta = zv +
+    dc x^(chi+1)/(2 omega2)``; ``unused`` enters nothing."""
+
+    def __call__(self, v):
+        from inverse.iwan_modal import kappa_ratio
+
+        x = EXC / EXC[0]
+        dc = math.exp(v["ln_dc1"]) * x ** (v["chi"] + 1.0)
+        om2 = v["w0"] ** 2 - kappa_ratio(v["chi"], "exact") * dc
+        return om2, v["zv"] * v["w0"] / np.sqrt(om2) + dc / (2.0 * om2)
+
+
+PARAMS = {"chi": Parameter("chi", -0.4, -0.98, -0.005, 0.05),
+          "ln_dc1": Parameter("ln_dc1", math.log(20.0), -10, 10, 0.2),
+          "zv": Parameter("zv", 0.0128, 1e-4, 0.1, 1e-5),
+          "w0": Parameter("w0", 1583.3, 1500.0, 1700.0, 0.01),
+          "unused": Parameter("unused", 0.0, -5.0, 5.0, 1.0)}
+TRUTH = {"chi": -0.55, "ln_dc1": math.log(35.0), "zv": 0.0127, "w0": 1583.0, "unused": 0.0}
+
+
+@pytest.fixture(scope="module")
+def planted():
+    rng = np.random.default_rng(11)
+    om2, ze = ModalIwan()(TRUTH)
+    noise = NoiseModel(np.full(10, 15.0), np.full(10, 3e-6), "planted")
+    obs_w = om2 + 15.0 * rng.standard_normal(10)
+    obs_z = ze + 3e-6 * rng.standard_normal(10)
+    prob = UpdateProblem(ModalIwan(), obs_w, obs_z, noise, np.ones(10, dtype=bool), PARAMS)
+    best = fit(prob, ("chi", "ln_dc1", "zv", "w0"))
+    return prob, best
+
+
+def test_fit_recovers_planted_parameters(planted):
+    prob, best = planted
+    assert best.success and best.dof == 16
+    assert best.chi2 < 40.0                       # chi2(16): 99.9 % below 39.3
+    for name in ("chi", "ln_dc1", "zv", "w0"):
+        se = best.std_error(name)
+        assert abs(best.values[name] - TRUTH[name]) < 3.5 * se, name
+
+
+def test_profiles_cover_the_truth_and_flag_what_the_data_do_not_see(planted):
+    prob, best = planted
+    free = ("chi", "ln_dc1", "zv", "w0")
+    grids = {n: linear_grid(best, n, PARAMS[n], 4) for n in ("chi", "zv")}
+    grids["unused"] = ([-1.0, -3.0], [1.0, 3.0])
+    prof = run_profiles(prob, best, grids, free)
+    assert threshold(best) == pytest.approx(3.8415, abs=1e-3)   # no misfit: Wilks
+    for n in ("chi", "zv"):
+        lo, hi = prof[n].interval
+        assert prof[n].status == "determined"
+        assert lo < TRUTH[n] < hi
+        # nearly linear model: the profile interval is about +/- 1.96 standard errors
+        assert (hi - lo) / (2 * 1.96 * best.std_error(n)) == pytest.approx(1.0, abs=0.3)
+    assert prof["unused"].status == "not determined"
+    assert np.allclose(prof["unused"].delta, 0.0, atol=1e-6)
+
+
+def test_profile_store_resumes(planted, tmp_path):
+    prob, best = planted
+    grids = {"chi": linear_grid(best, "chi", PARAMS["chi"], 3)}
+    free = ("chi", "ln_dc1", "zv", "w0")
+    first = run_profiles(prob, best, grids, free, store=(tmp_path, "abc"))
+    files = sorted(tmp_path.glob("branch_*.json"))
+    assert len(files) == 2
+    again = run_profiles(prob, best, grids, free, store=(tmp_path, "abc"))
+    assert [p.chi2 for p in again["chi"].points] == [p.chi2 for p in first["chi"].points]
+    with pytest.raises(ValueError, match="another"):
+        run_profiles(prob, best, grids, free, store=(tmp_path, "other"))
+
+
+# ------------------------------------------------------------------ the FE double beam
+
+
+@pytest.fixture(scope="module")
+def fe():
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+
+    return DoubleBeamLevels(EXC, np.arange(1, 11), (2 * np.pi * 251.99) ** 2, 0.01278)
+
+
+BASE = {"chi": -0.45, "ln_dc1": math.log(20.0), "zeta_v": 0.0127, "f0_hz": 251.99,
+        "log10_kt": 8.0}
+
+
+def test_fe_levels_invariant_to_the_force_scale(fe):
+    """omega2 and zeta exactly invariant; R~ as s^-(chi+1), phi_max as s."""
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+
+    s = 7.3
+    other = DoubleBeamLevels(EXC, np.arange(1, 11), (2 * np.pi * 251.99) ** 2, 0.01278,
+                             force_scale=s)
+    a, b = fe.predict(BASE), other.predict(BASE)
+    np.testing.assert_allclose(b.omega2, a.omega2, rtol=1e-12)
+    np.testing.assert_allclose(b.zeta, a.zeta, rtol=1e-8)
+    np.testing.assert_allclose(b.slip_over_phi_max, a.slip_over_phi_max, rtol=1e-8)
+    assert b.joint["R"] == pytest.approx(a.joint["R"] * s ** -(BASE["chi"] + 1), rel=1e-9)
+    assert b.joint["phi_max"] == pytest.approx(a.joint["phi_max"] * s, rel=1e-9)
+
+
+def test_fe_stuck_frequency_and_level_one(fe):
+    """f0_hz sets the stuck frequency exactly; a joint 1e6 times weaker leaves level 1
+    at f0 and zeta_v (to the joint's tiny share)."""
+    weak = dict(BASE, ln_dc1=BASE["ln_dc1"] - math.log(1e6))
+    p = fe.predict(weak)
+    assert p.frequency_hz[0] == pytest.approx(251.99, abs=1e-6)
+    assert p.zeta[0] == pytest.approx(0.0127, rel=1e-8)
+
+
+def test_fe_update_recovers_planted_fe_parameters(fe):
+    """Levels simulated by the FE model with planted values and noise: the base fit
+    returns them within 3.5 standard errors."""
+    from cases.double_beam.fe_levels import Simulator
+
+    rng = np.random.default_rng(5)
+    truth = fe.predict(BASE)
+    s_w, s_z = 10.0, 2e-6
+    obs_w = truth.omega2 + s_w * rng.standard_normal(10)
+    obs_z = truth.zeta + s_z * rng.standard_normal(10)
+    P = {"chi": Parameter("chi", -0.3, -0.98, -0.005, 0.05),
+         "ln_dc1": Parameter("ln_dc1", math.log(10.0), -15, 15, 0.2),
+         "zeta_v": Parameter("zeta_v", 0.0128, 1e-5, 0.2, 1e-5),
+         "f0_hz": Parameter("f0_hz", 252.0, 240, 260, 1e-3),
+         "log10_kt": Parameter("log10_kt", 8.0, 6, 11, 0.5)}
+    prob = UpdateProblem(Simulator(fe), obs_w, obs_z,
+                         NoiseModel(np.full(10, s_w), np.full(10, s_z), "planted"),
+                         np.ones(10, dtype=bool), P)
+    best = fit(prob, ("chi", "ln_dc1", "zeta_v", "f0_hz"))
+    assert best.chi2 < 2 * 16
+    for name in ("chi", "ln_dc1", "zeta_v", "f0_hz"):
+        assert abs(best.values[name] - BASE[name]) < 3.5 * best.std_error(name), name
