@@ -1,6 +1,6 @@
 """The FRF-level synthetic series: describing functions against quadrature, the steady
-state against energy and force balance, the identification's stds against Monte Carlo
-scatter, and the drawn series against their design."""
+state against energy and force balance, the noise and the identification path, and the
+drawn series against their design."""
 from __future__ import annotations
 
 import math
@@ -11,7 +11,7 @@ from scipy import integrate
 
 from cases.synthetic_series import CATALOGUE, OUT_OF_CATALOGUE, generate_series, truth_of
 from cases.synthetic_series import effects as fx
-from cases.synthetic_series.identification import identify_level
+from cases.synthetic_series.levels import noisy
 from cases.synthetic_series.mode import Exciter, JointedMode, level_frf
 from joints.iwan import IwanParameters, dissipation_per_cycle
 
@@ -86,28 +86,30 @@ def test_response_control_holds_the_amplitude_and_the_exciter_loses_force():
     assert np.all(F < exc.force(0.1))
 
 
-def test_identified_stds_match_monte_carlo_scatter():
-    # a linear mode, 20 noise draws: the scatter of the identified omega2 and zeta
-    # matches the delta-method std within the sampling error of 20 draws (~ 16 %)
-    rng = np.random.default_rng(5)
-    w0, z = 2 * np.pi * 80, 0.01
-    f = np.linspace(76, 84, 41)
-    W = 2 * np.pi * f
-    H = 1 / (w0**2 - W**2 + 2j * z * w0 * W)
-    rows = []
-    for _ in range(20):
-        n = (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)) / math.sqrt(2)
-        rows.append(identify_level(f, H * (1 + 3e-3 * n), np.ones_like(f), "force", 1.0))
-    w2 = np.array([r["omega2"] for r in rows])
-    ze = np.array([r["zeta"] for r in rows])
-    s_w2 = np.mean([r["omega2_std"] for r in rows])
-    s_z = np.mean([r["zeta_std"] for r in rows])
-    assert 0.6 < np.std(w2, ddof=1) / s_w2 < 1.5
-    assert 0.6 < np.std(ze, ddof=1) / s_z < 1.5
-    assert abs(np.mean(w2) - w0**2) < 3 * s_w2 / math.sqrt(20) + 1e-9 * w0**2
-    # response amplitude at resonance: |H(w_n)| x force = 1/(2 zeta w0^2) here
-    resp = np.mean([r["response_amplitude"] for r in rows])
-    assert resp == pytest.approx(1 / (2 * z * w0**2), rel=3e-3)
+def test_frf_noise_has_the_stated_level():
+    # relative complex noise eps (std of the real and imaginary parts eps/sqrt(2) each)
+    # plus a floor of 2 % eps of the peak
+    rng = np.random.default_rng(2)
+    H = np.full(200000, 1.0 + 0j)
+    e = noisy(rng, H, 1e-3) - H
+    assert np.std(e.real) == pytest.approx(1e-3 * math.sqrt((1 + 0.02**2) / 2), rel=0.01)
+    assert np.std(e.imag) == pytest.approx(np.std(e.real), rel=0.01)
+
+
+def test_the_table_comes_from_the_project_identification():
+    # the generator's table is what `iwanfe diagnose FILE...` makes of its FRF files
+    from ident.frf_files import FRFSet
+    from ident.series import identify_series
+    from ident.series_table import series_table
+
+    s = generate_series("none", 21, n_levels=6)
+    sets = [FRFSet(f["freq_hz"], f["frf"], ["1"], quantity="receptance",
+                   excitation=f["held"], reference="1", control=f["control"],
+                   run_order=f["run_order"], force=f["force"]) for f in s.frfs]
+    d = series_table(identify_series(sets, n_modes=1, check_band=False))
+    np.testing.assert_array_equal(d.omega2, s.data.omega2)
+    np.testing.assert_array_equal(d.zeta_std, s.data.zeta_std)
+    np.testing.assert_array_equal(d.response_amplitude, s.data.response_amplitude)
 
 
 def test_labels():

@@ -36,7 +36,6 @@ import zlib
 import numpy as np
 
 from cases.synthetic_series.hidden import TooLarge, add_effects
-from cases.synthetic_series.identification import pole_std
 from cases.synthetic_series.levels import SyntheticSeries, force_for, noisy, simulate_levels
 from cases.synthetic_series.mode import JointedMode, level_frf
 from ident.identify import identify
@@ -101,8 +100,8 @@ def _sigma_at(rng, mode, W, x, eps, control):
     H, _, _, _ = level_frf(mode, W, control, held)
     Hn = noisy(rng, H, eps)
     with np.errstate(all="ignore"):
-        ident = identify(W / (2 * np.pi), Hn, n_modes=1)   # ValueError: draw again
-    return pole_std(W / (2 * np.pi), Hn, ident.modes[0].pole)
+        mode1 = identify(W / (2 * np.pi), Hn, n_modes=1).modes[0]   # ValueError: redraw
+    return mode1.omega2_std, mode1.zeta_std
 
 
 def _macro_x_top(joint, omega0, target, sig, x_max=3.0):

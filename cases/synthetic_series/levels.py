@@ -2,9 +2,14 @@
 
 FRF noise: complex Gaussian, relative ``eps`` of ``|H|`` per line plus a floor of
 2 % of ``eps`` times the peak; the force transducer reads the force with relative
-noise ``eps``. Each level is identified on its own (:func:`identify_level`); a level
-whose response folds over (several steady states) or whose identification fails
-rejects the draw (the caller draws again).
+noise ``eps``. Each level becomes an FRF set (receptance at the drive point, the
+``force`` column, the held level, ``control``, ``run_order``) and the series goes
+through the project's own identification, as ``iwanfe diagnose FILE...`` would take
+it (:func:`ident.series.identify_series` with one mode per level, as ``--modes 1``;
+the band-sensitivity check is skipped for speed: it only adds warnings), and
+:func:`ident.series_table.series_table` writes the table (stds, response amplitude,
+excitation, warnings). A level whose response folds over (several steady states) or
+a series the identification refuses rejects the draw (the caller draws again).
 """
 from __future__ import annotations
 
@@ -13,9 +18,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cases.synthetic_series.identification import identify_level
 from cases.synthetic_series.mode import level_frf
-from ident.modal_data import MeasuredData
+from ident.errors import InputError
+from ident.frf_files import FRFSet
+from ident.series import identify_series
+from ident.series_table import series_table
 
 __all__ = ["SyntheticSeries", "noisy", "force_for", "simulate_levels"]
 
@@ -61,7 +68,7 @@ def simulate_levels(rng, drawn: dict, control: str) -> SyntheticSeries | None:
             exciter.g = F_top / float(exciter.force(1.0))
             held = rel.copy()
     scale = drawn["scale"] if drawn["scale"] is not None else np.ones(n)
-    rows, frfs, x_peak = [], [], []
+    sets, frfs, x_peak = [], [], []
     for v in range(n):
         H, F, X, fold = level_frf(mode, W, control, held[v], float(run[v]),
                                   exciter, float(scale[v]))
@@ -70,23 +77,20 @@ def simulate_levels(rng, drawn: dict, control: str) -> SyntheticSeries | None:
         Hn = noisy(rng, H, eps)
         Fm = F * (1 + eps * rng.standard_normal(F.shape))
         f_hz = W / (2 * math.pi)
-        try:
-            with np.errstate(all="ignore"):
-                row = identify_level(f_hz, Hn, Fm, control, float(held[v]))
-        except (ValueError, IndexError, np.linalg.LinAlgError):
-            return None
-        if not (np.isfinite(row["omega2"]) and 0 < row["zeta"] < 1):
-            return None
-        rows.append(row)
+        sets.append(FRFSet(f_hz, Hn, ["1"], quantity="receptance", excitation=float(held[v]),
+                           reference="1", source=f"level_{v + 1:02d}", control=control,
+                           run_order=int(run[v]), force=Fm))
         x_peak.append(float(X.max()))
         frfs.append({"freq_hz": f_hz, "frf": Hn, "force": Fm, "held": float(held[v]),
                      "run_order": int(run[v]), "control": control})
-    col = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    data = MeasuredData(level=np.arange(1, n + 1), excitation=col["excitation"],
-                        omega2=col["omega2"], zeta=col["zeta"], mode=np.ones(n, int),
-                        run_order=run, response_amplitude=col["response_amplitude"],
-                        omega2_std=col["omega2_std"], zeta_std=col["zeta_std"],
-                        control=np.full(n, control), source="synthetic")
+    try:
+        with np.errstate(all="ignore"):
+            data = series_table(identify_series(sets, n_modes=1, check_band=False))
+    except (InputError, ValueError, IndexError, np.linalg.LinAlgError):
+        return None
+    if len(data) != n or data.omega2_std is None:
+        return None
+    data.source = "synthetic"
     truth = dict(drawn["truth"], x_peak=np.array(x_peak) / mode.joint.phi_max,
-                 fit_error=col["fit_error"])
+                 fit_error=np.asarray(data.extra["x_fit_error"], float))
     return SyntheticSeries(data=data, frfs=frfs, truth=truth)
