@@ -23,7 +23,7 @@ explanation has at least a third of the named one's weight (:data:`W_AMBIGUOUS`)
 evidence ratio below 3 is "barely worth mentioning" (Jeffreys' scale), so both are
 named.
 
-Decision.
+Decision (over the candidates whose effects are not exactly zero).
 1. Contradictions (:func:`inverse.contradictions.iwan_contradictions` judged against
    the same noise levels, plus the base fit collapsing to no joint while the damping
    grows) refute the base model: ``none`` is then not a possible answer.
@@ -151,6 +151,14 @@ def _pair_starts(model, fits):
     return [np.concatenate([[f.theta[0]], a.theta[1:], b.theta[1:]]) for f in (a, b)]
 
 
+def _inactive(fit, obs) -> bool:
+    """A cause whose non-negative effect came out exactly zero (hardening ``h`` or added
+    damping ``q`` on its bound): the candidate is a smaller one in disguise, not an
+    explanation of its own."""
+    lin = dict(zip(fit.model.linear_names(obs.log_r is not None), fit.linear))
+    return any(lin.get(k, 1.0) <= 0.0 for k in ("h", "q"))
+
+
 def _fit_all(models, obs):
     fits = {m.name: fit_model(m, obs) for m in models if len(m.causes) < 2}
     for m in models:
@@ -198,7 +206,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     base_zeta = obs.zeta - base.residual[obs.n:2 * obs.n] * obs.sigma["zeta"]
     found += own_contradictions(d, params["none"], base_zeta, levels_noise)
     refuted = [c for c in found if c.kind in _REFUTING]
-    pool = [k for k in ic if not (refuted and k == "none")]
+    pool = [k for k in ic if not (refuted and k == "none") and not _inactive(fits[k], obs)]
     testable = [k for k in pool if tests[k]["p_value"] is not None]
     inside = [k for k in testable if tests[k]["p_value"] >= P_UNEXPLAINED]
     if not testable and pool:

@@ -49,12 +49,12 @@ cause                          extension (nonlinear; linear parameters)
                                ``C(r) = 1 - (2/pi)(asin r + r sqrt(1 - r^2))`` of a
                                stiffness that engages past ``s_c`` in [0, 0.9] (a gap
                                closing; ``C = 1`` at ``s_c = 0``); ``n = nu + 1.5 w``,
-                               ``nu`` in [0, 3], ``w`` = 1 for an onset below the lowest
-                               level ``s_1``, 0 for an onset above ``2 s_1`` (log-linear
-                               between): over the measured levels a term without a
-                               visible onset must grow at least as ``s**1.5``, since
-                               ``s**n`` with ``n < 1`` would only re-tie the Iwan terms
-                               (``s**p``) (``nu, s_c``; ``h >= 0``)
+                               ``nu`` in [0, 3], ``w`` = 1 for an onset at or below the
+                               second-lowest level, 0 at or above the third-lowest
+                               (log-linear between): a term without an onset that two
+                               levels below it show must grow at least as ``s**1.5``,
+                               since ``s**n`` with ``n < 1`` would only re-tie the Iwan
+                               terms (``s**p``) (``nu, s_c``; ``h >= 0``)
 ``thermal-drift``              ``omega2 += d f(t_v)``, ``t_v`` the run order scaled to
                                [0, 1], ``f = (1 - e^(-b t))/(1 - e^(-b))``: an exponential
                                approach to a new temperature (Newton), linear at ``b = 0``,
@@ -216,12 +216,15 @@ def box_cox(log_s, gamma, kappa):
     return gamma * np.where(np.abs(kl) > 1e-9, np.expm1(kl) / safe, log_s * (1 + 0.5 * kl))
 
 
-def hardening_power(nu, s_contact, s_low):
-    """Power ``n = nu + 1.5 w`` of the hardening term, ``w`` = 1 for an onset
-    ``s_contact`` below the lowest level ``s_low``, 0 above ``2 s_low``, log-linear
-    between."""
+def hardening_power(nu, s_contact, s_levels):
+    """Power ``n = nu + 1.5 w`` of the hardening term: ``w`` = 1 for a contact onset
+    ``s_contact`` at or below the second-lowest level of ``s_levels``, 0 at or above
+    the third-lowest, log-linear between (an onset is seen when at least two levels lie
+    below it, showing no hardening)."""
+    lv = np.sort(np.asarray(s_levels, float))
+    lo, hi = lv[min(1, lv.size - 1)], lv[min(2, lv.size - 1)]
     with np.errstate(divide="ignore"):
-        w = 1.0 - np.log(np.maximum(s_contact, 1e-300) / s_low) / np.log(2.0)
+        w = np.log(hi / np.maximum(s_contact, 1e-300)) / max(np.log(hi / lo), 1e-12)
     return nu + 1.5 * np.clip(w, 0.0, 1.0)
 
 
@@ -272,7 +275,7 @@ def design(model: Model, obs: Observations, theta):
         om.append(-kappa_ratio(p - 1.0, "exact") * sp)
         ze.append(0.5 * sp / w2)
     if model.has("geometric-hardening"):
-        n_h = hardening_power(col["nu_hardening"], col["s_contact"], obs.s.min())
+        n_h = hardening_power(col["nu_hardening"], col["s_contact"], obs.s)
         om.append(np.exp(n_h * log_s) * contact_shape(col["s_contact"] * np.exp(-log_s)))
         ze.append(zero)
     if model.has("thermal-drift"):

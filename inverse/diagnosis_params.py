@@ -53,7 +53,7 @@ def physical_parameters(fit: Fit, obs: Observations, run_span: float) -> dict:
         out.update(gamma=nl["gamma"], kappa=nl["kappa"], amplitude_shortfall_top=shortfall)
     if m.has("geometric-hardening"):
         top = np.exp(log_top)
-        n_h = float(hardening_power(nl["nu_hardening"], nl["s_contact"], obs.s.min()))
+        n_h = float(hardening_power(nl["nu_hardening"], nl["s_contact"], obs.s))
         out.update(h_top=lin["h"] * top**n_h * contact_shape(nl["s_contact"] / top),
                    n_hardening=n_h, s_contact=nl["s_contact"])
     if m.has("thermal-drift"):
