@@ -12,7 +12,8 @@ or up-and-down; never ascending when the hidden effect follows time), the joint'
 damping growth (15-400 identification standard deviations of a linear level; for a
 preload loss 40-100 % of the largest allowed; frequency drop at most 8 % of omega^2), the top slip 0.3-0.9 phi_max (more for macro-slip), and each effect's
 family and size. Sizes are in units of the identification's standard uncertainty at
-the top level (a sizing pass identifies the top level without effects): 15-120
+the top level (a sizing pass identifies the top level without effects; for macro-slip
+a second pass at the macro-slip amplitude): 15-120
 (macro-slip departure from the power law 15-200; force shortfall 8-40 % at the top;
 out-of-catalogue effects 20-150).
 
@@ -146,11 +147,18 @@ def _attempt(rng, causes, ooc, n, control):
     sig = _sigma_at(rng, mode, W, x_top * _PHI_MAX, eps, control)
     truth = dict(f0=f0, zeta0=zeta0, chi=chi, beta=beta, eps=eps, n_lines=n_lines, R=R,
                  dzeta_top_joint=dz_top, sigma_omega2_top=sig[0], sigma_zeta_top=sig[1])
-    if "macro-slip" in causes:
-        x_top = _macro_x_top(joint, omega0, _logu(rng, 15, 200), sig)
+    if "macro-slip" in causes:         # sized in the noise of the macro-slip top level
+        target = _logu(rng, 15, 200)
+        x_top = _macro_x_top(joint, omega0, target, sig)
         if x_top is None:
             return None
         W = _lines(mode, x_top * _PHI_MAX, n_lines)
+        sig = _sigma_at(rng, mode, W, x_top * _PHI_MAX, eps, control)
+        x_top = _macro_x_top(joint, omega0, target, sig)
+        if x_top is None:
+            return None
+        W = _lines(mode, x_top * _PHI_MAX, n_lines)
+        truth.update(sigma_omega2_top=sig[0], sigma_zeta_top=sig[1])
     X_top = x_top * _PHI_MAX
     truth["x_top"] = x_top
     ratio = rng.uniform(1.25, 2.0)
