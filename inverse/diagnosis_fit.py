@@ -1,42 +1,55 @@
-"""Maximum-likelihood fits of the diagnosis models (:mod:`inverse.diagnosis_models`).
+"""Weighted least-squares fits of the diagnosis models (:mod:`inverse.diagnosis_models`).
 
-Fitting: Gaussian maximum likelihood with one unknown noise level per channel
-(``omega2``, ``zeta``, and ``log response_amplitude`` when present), estimated from
-the fit itself (iteratively reweighted: weights ``1/sigma``, ``sigma^2 = RSS/n``,
-floored at 2 % of the paper's noise). The linear parameters are solved exactly
-(non-negativity where physical) for each value of the nonlinear ones (``chi`` on a
-grid refined by Brent's method; with ``x_top`` or ``gamma, kappa`` on a grid refined
-by Nelder-Mead), so the fit is global in chi.
+The noise level of every channel and level is known when a model is fitted (from the
+identification's stds or estimated beforehand: :mod:`inverse.diagnosis_noise`), so the
+Gaussian log-likelihood is ``-chi2/2`` up to a constant shared by every model, with
+``chi2`` the sum of squared standardized residuals. For each point of the nonlinear
+parameters the linear ones are solved exactly (variable projection), non-negative
+where the physics says so (exact: the best feasible solution over the faces of the
+constraint set), for a whole batch of points at once (normal equations with one step
+of refinement, Bjorck 1987). The nonlinear parameters are searched on a grid (global
+in chi and in every extension's shape) and refined by Levenberg-Marquardt steps whose
+Jacobian and trial steps are one batched evaluation each. A refit on a subset of the
+levels (cross-validation) starts from the fit to all levels.
+
+Information criteria (``k`` model parameters, ``N`` data in the fit; the noise levels
+are not fitted): ``AIC = chi2 + 2k``, defined when ``N > k``. With known noise levels
+the expected optimism of ``chi2`` is exactly ``2k`` for a linear model, so AIC needs
+no small-sample correction; the AICc term ``2k(k+1)/(N-k-1)`` (Hurvich & Tsai 1989)
+corrects for a noise variance estimated from the model's own residuals, which is not
+done here (it is reported, not used). ``BIC = chi2 + k ln N``.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
 
-from inverse.diagnosis_models import Observations, design_matrices, log_amplitude, tie_ratio
+from inverse.diagnosis_models import Model, Observations, design
 
-_SIGMA_FLOOR_REL_OMEGA2 = 2e-7   # 2 % of the paper's 1e-5 relative noise
-_SIGMA_FLOOR_ZETA = 2e-7         # 2 % of the paper's 1e-5 absolute noise
-_SIGMA_FLOOR_RESPONSE = 2e-4     # 2 % of a 1 % response-amplitude noise
+__all__ = ["Fit", "solve_nonneg", "evaluate", "refine", "fit_model", "fit_folds",
+           "information_criteria"]
 
 
 @dataclass
 class Fit:
-    """A fitted model: parameters, fitted values, noise levels and criteria."""
+    """A fitted model.
 
-    model: str
-    theta: np.ndarray           # nonlinear parameters (chi+1, ...)
-    linear: np.ndarray          # [W, c, K1 or U, extra]
-    omega2_fit: np.ndarray      # at every level (held-out ones are predictions)
-    zeta_fit: np.ndarray
-    log_response_fit: np.ndarray | None
-    sigma: dict                 # noise level per channel
-    n_params: int               # model parameters, without the noise levels
+    ``residual`` holds the standardized residuals (data - model)/sigma of *every* row
+    (omega2 rows, zeta rows, response rows), so rows left out of the fit are prediction
+    errors in noise units; ``train`` the levels used."""
+
+    model: Model
+    theta: np.ndarray
+    linear: np.ndarray
+    residual: np.ndarray
+    log_s: np.ndarray
+    train: np.ndarray
+    chi2: float
     n_data: int
-    loglik: float
-    aicc: float
+    n_params: int
+    aic: float | None
+    aicc: float | None
     bic: float
     parameters: dict = field(default_factory=dict)
 
@@ -45,201 +58,190 @@ class Fit:
         return float(self.theta[0] - 1.0)
 
 
-# nonlinear parameters of each model: grid axes and bounds (p = chi + 1)
-_P_FINE = np.linspace(0.02, 0.98, 49)
-_P_COARSE = np.linspace(0.02, 0.98, 25)
-_NONLINEAR = {
-    "base": ([_P_FINE], [0.005], [0.995]),
-    "geometric-hardening": ([_P_FINE], [0.005], [0.995]),
-    "thermal-drift": ([_P_FINE], [0.005], [0.995]),
-    "quadratic-damping": ([_P_FINE], [0.005], [0.995]),
-    # log(x_top): top slip amplitude over phi_max
-    # (x_top >= 1.02: at x_top -> 1 the Dirac term vanishes and beta is unbounded)
-    "macro-slip": ([_P_COARSE, np.log(np.geomspace(1.02, 4.0, 21))],
-                   [0.005, np.log(1.02)], [0.995, np.log(8.0)]),
-    # log(kappa), gamma: log s_eff = log s + gamma (s**kappa - 1)
-    "nonproportional-amplitude": ([_P_COARSE, np.log(np.geomspace(0.3, 4.0, 7)),
-                                   np.linspace(-0.6, 0.4, 21)],
-                                  [0.005, np.log(0.1), -2.0], [0.995, np.log(8.0), 2.0]),
-}
-_N_LINEAR = {"base": 3, "nonproportional-amplitude": 3, "macro-slip": 4,
-             "geometric-hardening": 4, "thermal-drift": 4, "quadratic-damping": 4}
+def _face_solve(An, b, free):
+    """Unconstrained least squares on the columns ``free`` of the column-scaled stack
+    ``An``: normal equations and one step of refinement (Bjorck 1987)."""
+    Af = An[:, :, free]
+    M = np.einsum("gnk,gnl->gkl", Af, Af) + 1e-13 * np.eye(len(free))
+    y = np.linalg.solve(M, np.einsum("gnk,gn->gk", Af, b)[..., None])[..., 0]
+    r = np.einsum("gnk,gk->gn", Af, y) - b
+    return y - np.linalg.solve(M, np.einsum("gnk,gn->gk", Af, r)[..., None])[..., 0]
 
 
-def _solve_batched(A, b, nonneg):
-    """Least squares ``min |A x - b|`` for a stack of A (G, m, k), with x_j >= 0 on
-    ``nonneg`` (exact: best feasible solution over the faces of the constraint set).
-
-    Returns (x (G, k), rss (G,))."""
-    G, m, k = A.shape
-    best_x = np.zeros((G, k))
-    best_rss = np.full(G, np.inf)
-    scale = np.sqrt(np.sum(A**2, axis=1))  # (G, k)
+def solve_nonneg(A, b, nonneg):
+    """``min |A x - b|`` for stacks ``A`` (G, N, k), ``b`` (G, N) with ``x_j >= 0`` on
+    ``nonneg``: the unconstrained solution where it is feasible (then it is the
+    optimum of the convex problem), else the best feasible solution over the faces of
+    the constraint set. Returns x (G, k)."""
+    G, N, k = A.shape
+    scale = np.sqrt(np.einsum("gnk,gnk->gk", A, A))
     scale = np.where(scale > 0, scale, 1.0)
     An = A / scale[:, None, :]
-    n_c = len(nonneg)
-    for mask in range(2 ** n_c):
-        zeroed = [nonneg[j] for j in range(n_c) if mask >> j & 1]
-        free = [j for j in range(k) if j not in zeroed]
-        Af = An[:, :, free]
-        Q, Rm = np.linalg.qr(Af)
-        qtb = np.einsum("gmk,m->gk", Q, b)
-        diag = np.abs(np.diagonal(Rm, axis1=1, axis2=2))
-        ok = np.all(diag > 1e-12 * diag.max(axis=1, keepdims=True), axis=1)
-        Rs = np.where(ok[:, None, None], Rm, np.eye(len(free))[None])
-        y = np.linalg.solve(Rs, qtb[..., None])[..., 0]
-        x = np.zeros((G, k))
-        x[:, free] = y / scale[:, free]
-        feasible = ok & (np.all(x[:, nonneg] >= 0.0, axis=1) if nonneg else True)
-        rss = np.sum((np.einsum("gmk,gk->gm", A, x) - b) ** 2, axis=1)
-        better = feasible & (rss < best_rss)
-        best_x[better] = x[better]
-        best_rss[better] = rss[better]
-    return best_x, best_rss
+    x = _face_solve(An, b, list(range(k)))
+    bad = np.flatnonzero(np.any(x[:, nonneg] < 0.0, axis=1)) if nonneg else np.zeros(0, int)
+    if bad.size:
+        Ab, bb = An[bad], b[bad]
+        best = np.zeros((bad.size, k))
+        best_rss = np.full(bad.size, np.inf)
+        for mask in range(1, 2 ** len(nonneg)):
+            zeroed = [c for i, c in enumerate(nonneg) if mask >> i & 1]
+            free = [j for j in range(k) if j not in zeroed]
+            y = np.zeros((bad.size, k))
+            y[:, free] = _face_solve(Ab, bb, free)
+            r = np.einsum("gnk,gk->gn", Ab, y) - bb
+            rss = np.einsum("gn,gn->g", r, r)
+            ok = np.all(y[:, nonneg] >= 0.0, axis=1) & (rss < best_rss)
+            best[ok], best_rss[ok] = y[ok], rss[ok]
+        x[bad] = best
+    return x / scale
 
 
-def _channel_fit(model, d, theta, sig):
-    """Best linear parameters and weighted total RSS for each theta (G, m).
+def evaluate(model: Model, obs: Observations, theta, rows):
+    """Linear solution for every point of ``theta`` (G, d), fitted on the rows ``rows``
+    (bool, (N,) for all points or (G, N) per point).
 
-    ``d``: dict of training arrays (s, t_run, omega2, zeta, log_r or None).
-    Returns (linear (G, k), total weighted rss (G,), per-channel residual function)."""
-    A_om, A_ze, nonneg, log_s = design_matrices(model, d["s"], d["t_run"], d["omega2"], theta)
-    A = np.concatenate([A_om / sig["omega2"], A_ze / sig["zeta"]], axis=1)
-    b = np.concatenate([d["omega2"] / sig["omega2"], d["zeta"] / sig["zeta"]])
-    lin, rss = _solve_batched(A, b, nonneg)
-    if d["log_r"] is not None:
-        e = d["log_r"][None, :] - log_s
-        e = e - e.mean(axis=1, keepdims=True)
-        rss = rss + np.sum(e**2, axis=1) / sig["response"] ** 2
-    return lin, rss, (A_om, A_ze, log_s)
+    Returns (x (G, k), residual on all rows (G, N): data - model, log_s (G, n))."""
+    A, b, log_s = design(model, obs, theta)
+    w = np.broadcast_to(np.asarray(rows, float), b.shape)
+    x = solve_nonneg(A * w[..., None], b * w, model.nonneg(obs.log_r is not None))
+    return x, b - np.einsum("gnk,gk->gn", A, x), log_s
 
 
-def fit_model(model: str, obs: Observations, train=None, outer: int = 4) -> Fit:
-    """Maximum-likelihood fit of ``model`` ("base" or a cause id) to ``obs[train]``.
+def information_criteria(chi2: float, k: int, n: int):
+    """(AIC or None when ``n <= k``, AICc or None when ``n <= k + 1``, BIC) with known
+    noise levels (module doc)."""
+    aic = chi2 + 2 * k if n > k else None
+    aicc = chi2 + 2 * k + 2 * k * (k + 1) / (n - k - 1) if n - k - 1 > 0 else None
+    return aic, aicc, chi2 + k * np.log(n)
 
-    Channels: omega2, zeta and, when the data have it, log(response_amplitude)
-    (predicted as ``alpha + log s_eff``: proportional to the joint amplitude). Each
-    channel has its own noise level, re-estimated ``outer`` times from the residuals
-    (``sigma^2 = RSS/n``, floored); between re-estimations the nonlinear parameters
-    are found on a grid and refined (Brent in 1-D, Nelder-Mead otherwise) with the
-    linear ones solved exactly.
 
-    Returns
-    -------
-    Fit (fitted values cover *all* levels, so held-out levels are predictions).
+def _bounds(model):
+    nl = model.nonlinear
+    return np.array([a[1] for a in nl]), np.array([a[2] for a in nl])
+
+
+def _grid(model):
+    axes = [a[3] for a in model.nonlinear]
+    return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+
+
+def _rss(model, obs, theta, rows, chunk=4096):
+    out = []
+    for i in range(0, theta.shape[0], chunk):
+        _, r, _ = evaluate(model, obs, theta[i:i + chunk], rows)
+        out.append(np.sum(r[:, rows] ** 2, axis=1))
+    return np.concatenate(out)
+
+
+_LAMBDAS = np.array([1e-3, 1e-2, 1e-1, 1.0, 10.0])
+
+
+def refine(model, obs, theta, rows, iters):
+    """Levenberg-Marquardt on the nonlinear parameters of ``B`` independent problems at
+    once (starts, or cross-validation folds): ``theta`` (B, d), ``rows`` (B, N) bool.
+
+    Box bounds by clipping. Each iteration is two batched evaluations: the forward-
+    difference Jacobians of every problem, then five trial steps each (damping 1e-3 ...
+    10 times the diagonal of J^T J); a problem stops when no trial lowers its chi2.
+    Returns the refined theta (B, d)."""
+    lo, hi = _bounds(model)
+    theta = np.array(theta, float)
+    B, d = theta.shape
+    rows = np.asarray(rows, bool)
+    wgt = rows.astype(float)
+    h = 1e-4 * (hi - lo)
+    _, r0, _ = evaluate(model, obs, theta, rows)
+    r0 = r0 * wgt
+    f0 = np.sum(r0**2, axis=1)
+    live = np.ones(B, bool)
+    L = _LAMBDAS.size
+    for _ in range(iters):
+        idx = np.flatnonzero(live)
+        if idx.size == 0:
+            break
+        th, rw, m = theta[idx], r0[idx], rows[idx]
+        step = np.where(th + h > hi, -h, h)                             # (b, d)
+        pts = (th[:, None, :] + step[:, :, None] * np.eye(d)).reshape(-1, d)
+        _, rj, _ = evaluate(model, obs, pts, np.repeat(m, d, axis=0))
+        rj = rj.reshape(idx.size, d, -1) * wgt[idx][:, None, :]
+        J = (rj - rw[:, None, :]) / step[:, :, None]                    # (b, d, N)
+        JtJ = np.einsum("bdn,ben->bde", J, J)
+        g = np.einsum("bdn,bn->bd", J, rw)
+        diag = np.maximum(np.einsum("bdd->bd", JtJ),
+                          1e-12 * np.maximum(np.einsum("bdd->b", JtJ), 1e-300)[:, None])
+        Mt = JtJ[:, None] + _LAMBDAS[None, :, None, None] * (diag[:, None, :, None]
+                                                            * np.eye(d))
+        with np.errstate(all="ignore"):
+            delta = np.linalg.solve(Mt, np.broadcast_to(g[:, None, :, None],
+                                                        (idx.size, L, d, 1)))[..., 0]
+        trial = np.clip(th[:, None, :] - np.nan_to_num(delta), lo, hi).reshape(-1, d)
+        _, rt, _ = evaluate(model, obs, trial, np.repeat(m, L, axis=0))
+        rt = rt.reshape(idx.size, L, -1) * wgt[idx][:, None, :]
+        ft = np.sum(rt**2, axis=2)
+        ft = np.where(np.isfinite(ft), ft, np.inf)
+        best = np.argmin(ft, axis=1)
+        fb = ft[np.arange(idx.size), best]
+        better = fb < f0[idx]
+        small = f0[idx] - fb < 1e-7 * np.maximum(fb, 1.0)
+        upd = idx[better]
+        theta[upd] = trial.reshape(idx.size, L, d)[better, best[better]]
+        r0[upd] = rt[better, best[better]]
+        f0[upd] = fb[better]
+        live[idx[~better | small]] = False
+    return theta
+
+
+def _finish(model, obs, cands, train):
+    """The best of the candidate thetas on ``train`` as a :class:`Fit`."""
+    rows = np.tile(train, len(obs.channels))
+    x, r, log_s = evaluate(model, obs, cands, rows)
+    f = np.sum(r[:, rows] ** 2, axis=1)
+    i = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
+    k = model.n_params(obs.log_r is not None)
+    n = int(rows.sum())
+    aic, aicc, bic = information_criteria(float(f[i]), k, n)
+    return Fit(model=model, theta=cands[i], linear=x[i], residual=r[i], log_s=log_s[i],
+               train=train, chi2=float(f[i]), n_data=n, n_params=k, aic=aic, aicc=aicc,
+               bic=bic)
+
+
+def fit_model(model: Model, obs: Observations, train=None, start=None, iters: int = 25,
+              n_starts: int = 3, extra_starts=None) -> Fit:
+    """Fit ``model`` to the levels ``train`` (default: all).
+
+    Without ``start``: grid search over the nonlinear parameters, then refinement from
+    the ``n_starts`` best grid points that are not neighbours, and from every theta of
+    ``extra_starts`` (a pair of causes also starts from the fits of each cause alone).
+    With ``start`` (a theta, e.g. the fit to all levels): refinement from there only.
     """
-    if model not in _NONLINEAR:
-        raise ValueError(f"unknown model {model!r}")
-    if model == "nonproportional-amplitude" and obs.response is None:
-        raise ValueError("nonproportional-amplitude needs the response_amplitude column")
     train = np.ones(obs.n, bool) if train is None else np.asarray(train, bool)
-    s_all = obs.s_exc
-    log_r_all = None if obs.response is None else np.log(obs.response)
-    d = {"s": s_all[train], "t_run": obs.t_run[train], "omega2": obs.omega2[train],
-         "zeta": obs.zeta[train], "log_r": None if log_r_all is None else log_r_all[train]}
-    n = int(train.sum())
-    med = float(np.median(obs.omega2))
-    floors = {"omega2": _SIGMA_FLOOR_REL_OMEGA2 * med, "zeta": _SIGMA_FLOOR_ZETA,
-              "response": _SIGMA_FLOOR_RESPONSE}
-    sig = {"omega2": 1e-5 * med, "zeta": 1e-5, "response": 0.01}
-    axes, lo, hi = _NONLINEAR[model]
-    lo, hi = np.array(lo), np.array(hi)
-    grid = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
-
-    def total(th):
-        th = np.clip(np.atleast_1d(th), lo, hi)[None, :]
-        return _channel_fit(model, d, th, sig)[1][0]
-
-    for _ in range(outer):
-        _, rss, _ = _channel_fit(model, d, grid, sig)
-        i = int(np.argmin(rss))
-        if grid.shape[1] == 1:
-            a, b = max(grid[i, 0] - 0.02, lo[0]), min(grid[i, 0] + 0.02, hi[0])
-            res = optimize.minimize_scalar(total, bounds=(a, b), method="bounded",
-                                           options=dict(xatol=1e-5))
-            theta = np.array([res.x])
-        else:
-            res = optimize.minimize(total, x0=grid[i], method="Nelder-Mead",
-                                    options=dict(xatol=1e-4, fatol=1e-6, maxiter=400))
-            theta = np.clip(res.x, lo, hi)
-            if res.fun > rss[i]:
-                theta = grid[i]
-        lin, _, (A_om, A_ze, log_s) = _channel_fit(model, d, theta[None, :], sig)
-        r_w = A_om[0] @ lin[0] - d["omega2"]
-        r_z = A_ze[0] @ lin[0] - d["zeta"]
-        sig["omega2"] = max(float(np.sqrt(np.mean(r_w**2))), floors["omega2"])
-        sig["zeta"] = max(float(np.sqrt(np.mean(r_z**2))), floors["zeta"])
-        if d["log_r"] is not None:
-            e = d["log_r"] - log_s[0]
-            sig["response"] = max(float(np.std(e)), floors["response"])
-
-    lin = lin[0]
-    om_fit, ze_fit, lr_fit = _predict(model, obs, theta, lin, train)
-    channels = ["omega2", "zeta"] + (["response"] if d["log_r"] is not None else [])
-    loglik = sum(-0.5 * n * (np.log(2 * np.pi * sig[c] ** 2) + 1.0) for c in channels)
-    k = _N_LINEAR[model] + theta.size + (1 if d["log_r"] is not None else 0)
-    kk, N = k + len(channels), n * len(channels)
-    aicc = (-2 * loglik + 2 * kk + 2 * kk * (kk + 1) / (N - kk - 1)
-            if N - kk - 1 > 0 else np.inf)
-    bic = -2 * loglik + kk * np.log(N)
-    fit = Fit(model=model, theta=theta, linear=lin, omega2_fit=om_fit, zeta_fit=ze_fit,
-              log_response_fit=lr_fit, sigma={c: sig[c] for c in channels}, n_params=k,
-              n_data=N, loglik=float(loglik), aicc=float(aicc), bic=float(bic))
-    fit.parameters = _parameters(fit, obs)
-    return fit
-
-
-def _predict(model, obs, theta, linear, train):
-    """(omega2, zeta, log response) at every level; the response offset alpha is the
-    training mean. The zeta channel uses the measured omega2 in its 1/sqrt(omega2)
-    and 1/omega2 factors (paper eq. 45), as the fit does."""
-    A_om, A_ze, _, log_s = design_matrices(model, obs.s_exc, obs.t_run, obs.omega2, theta[None, :])
-    lr = None
-    if obs.response is not None:
-        alpha = np.mean(np.log(obs.response[train]) - log_s[0][train])
-        lr = alpha + log_s[0]
-    return A_om[0] @ linear, A_ze[0] @ linear, lr
-
-
-def predict(fit: Fit, obs: Observations):
-    """Model values (omega2, zeta) of ``fit`` at every level of ``obs``."""
-    om, ze, _ = _predict(fit.model, obs, fit.theta, fit.linear, np.ones(obs.n, bool))
-    return om, ze
-
-
-def _parameters(fit: Fit, obs: Observations) -> dict:
-    """Physical parameters of a fit (JSON-friendly).
-
-    ``kappa1_B`` is the paper's ``|kappa1| B`` (hysteretic modal stiffness at level 1,
-    rad^2/s^2), ``kappa2_B`` the frequency drop at level 1."""
-    W, c = fit.linear[0], fit.linear[1]
-    chi, p = fit.chi, fit.chi + 1.0
-    log_s = log_amplitude(fit.model, obs.s_exc, fit.theta[None, :])[0]
-    s1 = float(np.exp(log_s[np.argmin(obs.level)]))  # level 1 on the fit's amplitude scale
-    out = {"omega2_0": W, "zeta_0": c / (2.0 * np.sqrt(W)), "chi": chi}
-    if fit.model == "macro-slip":
-        U, S = fit.linear[2], fit.linear[3]
-        x_top = float(np.exp(fit.theta[1]))
-        K1_top = U * 4.0 / (np.pi * (chi + 2.0) * (chi + 3.0)) * x_top**p
-        out.update(x_top=x_top, beta=S * p / U if U > 0 else np.inf)
+    rows = np.tile(train, len(obs.channels))
+    if start is None:
+        grid = _grid(model)
+        rss = _rss(model, obs, grid, rows)
+        order = np.argsort(np.where(np.isfinite(rss), rss, np.inf))
+        span = np.ptp(grid, axis=0) + 1e-300
+        starts = []
+        for i in order:
+            if all(np.max(np.abs(grid[i] - grid[j]) / span) > 0.25 for j in starts):
+                starts.append(i)
+            if len(starts) == n_starts:
+                break
+        theta0 = grid[starts]
+        if extra_starts:
+            lo, hi = _bounds(model)
+            theta0 = np.vstack([theta0, np.clip(np.asarray(extra_starts, float), lo, hi)])
     else:
-        K1_top = fit.linear[2]
-    out["kappa1_B"] = K1_top * s1**p
-    out["kappa2_B"] = tie_ratio(chi) * out["kappa1_B"]
-    out["tie_ratio_K2_over_K1"] = float(tie_ratio(chi))
-    a_max = obs.a_max
-    if fit.model == "geometric-hardening":
-        out.update(h=fit.linear[3] / a_max**2, h_top=fit.linear[3])
-    elif fit.model == "thermal-drift":
-        span = float(obs.run_order.max() - obs.run_order.min())
-        out.update(d=fit.linear[3] / span if span > 0 else 0.0, d_total=fit.linear[3])
-    elif fit.model == "quadratic-damping":
-        out.update(q=fit.linear[3] / a_max, q_top=fit.linear[3])
-    elif fit.model == "nonproportional-amplitude":
-        out.update(kappa=float(np.exp(fit.theta[1])), gamma=float(fit.theta[2]),
-                   amplitude_shortfall_top=float(1.0 - np.exp(
-                       log_s[np.argmax(obs.level)] - log_s[np.argmin(obs.level)]
-                       - np.log(obs.a_max))))
-    for ch, v in fit.sigma.items():
-        out[f"sigma_{ch}"] = v
-    return {k: float(v) for k, v in out.items()}
+        theta0 = np.atleast_2d(np.asarray(start, float))
+    cands = refine(model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), iters)
+    return _finish(model, obs, cands, train)
+
+
+def fit_folds(full: Fit, obs: Observations, trains, iters: int = 6) -> list:
+    """Refits of ``full``'s model to each training set of ``trains`` (F, n) bool, all
+    refined together from ``full.theta``. Returns a list of :class:`Fit`."""
+    trains = np.asarray(trains, bool)
+    rows = np.tile(trains, (1, len(obs.channels)))
+    start = np.repeat(full.theta[None], trains.shape[0], axis=0)
+    th = refine(full.model, obs, start, rows, iters)
+    return [_finish(full.model, obs, th[i:i + 1], trains[i]) for i in range(trains.shape[0])]

@@ -1,43 +1,117 @@
-"""Plain-words wording of a diagnosis (the ``summary`` of :func:`inverse.diagnose.diagnose`)."""
+"""Plain words of a diagnosis: its own contradictions and the summary paragraph."""
 from __future__ import annotations
 
-from inverse.diagnosis_models import Observations
+import math
+
+import numpy as np
+
+from inverse.contradictions import Z_STATE, Contradiction
+
+__all__ = ["own_contradictions", "chi_at_bound", "describe", "CAUSE_WORDS"]
+
+#: One sentence per cause: what it does to the data.
+CAUSE_WORDS = {
+    "macro-slip": "the joint leaves micro-slip at the top levels (slip past phi_max): "
+                  "the frequency drop and the damping growth bend away from the power law",
+    "nonproportional-amplitude": "the joint amplitude does not grow in proportion to the "
+                                 "excitation (the force reaching the structure falls short "
+                                 "of the held level)",
+    "geometric-hardening": "a hardening stiffness lifts the natural frequency with "
+                           "amplitude against the Iwan softening; the damping is unaffected",
+    "thermal-drift": "the natural frequency drifts with the order in which the levels were "
+                     "run, not with amplitude; the damping is unaffected",
+    "quadratic-damping": "an extra amplitude-dependent damping without softening (air, "
+                         "viscoelastic, material) makes the damping grow faster than the "
+                         "Iwan tie to the frequency drop allows",
+}
 
 
-def describe_cause(cause: str, params: dict, gain: float, obs: Observations) -> str:
-    """One paragraph in plain words naming the cause."""
+def own_contradictions(d, base_params: dict, base_zeta, noise) -> list:
+    """The diagnosis's own statements: the base fit collapsing to no joint while the
+    damping grows (``no-joint``), or putting chi on the edge of (-1, 0)
+    (``chi-at-bound``), each judged at :data:`Z_STATE` noise standard deviations."""
+    z = np.asarray(d.zeta, float)
+    a, b = 0, z.size - 1
+    s_g = math.hypot(noise.zeta[a], noise.zeta[b])
+    growth = z[b] - z[a]
+    if growth / s_g <= Z_STATE:
+        return []
+    fitted = float(base_zeta[b] - base_zeta[a])
+    out = []
+    la, lb = int(d.level[a]), int(d.level[b])
+    if fitted < 0.1 * growth:
+        out.append(Contradiction("no-joint", (
+            f"the base model's best fit has no joint to speak of (kappa1 B = "
+            f"{base_params['kappa1_B']:.3g} rad^2/s^2): it draws a nearly flat line "
+            f"(+{100 * fitted:.3g} % in damping ratio) through a damping ratio that grows "
+            f"{100 * z[a]:.4g} % -> {100 * z[b]:.4g} % ({z[b] / z[a]:.3g}x, level {la} -> "
+            f"{lb}): no micro-slip joint tied to the measured frequency change gives that "
+            f"growth"), {"kappa1_B": base_params["kappa1_B"], "zeta": [z[a], z[b]],
+                         "fitted_growth": fitted, "z_score": growth / s_g}))
+    chi = base_params["chi"]
+    if not -0.98 < chi < -0.02:
+        out.append(Contradiction("chi-at-bound", (
+            f"the base fit puts chi at {chi:.3f}, on the edge of the Iwan range -1 < chi "
+            f"< 0: the frequency change and the damping growth "
+            f"({100 * z[a]:.4g} % -> {100 * z[b]:.4g} %) are hardly tied by any "
+            f"micro-slip joint"), {"chi": chi}))
+    return out
+
+
+def chi_at_bound(params: dict, model: str):
+    """Statement when the named model's fit puts chi on the edge of (-1, 0), or None."""
+    chi = params.get("chi")
+    if chi is None or -0.98 < chi < -0.02:
+        return None
+    return Contradiction("chi-at-bound", (
+        f"the named model ({model}) puts chi at {chi:.3f}, on the edge of the Iwan range "
+        f"-1 < chi < 0: its joint is hardly a micro-slip Iwan joint (the fit leans on "
+        f"the bound)"), {"chi": chi, "model": model})
+
+
+def _fmt_causes(cause, also):
+    return " and ".join(f"`{c}`" for c in [cause, *also])
+
+
+def describe(cause: str, also: list, params: dict, gain, test: dict, contradictions: list,
+             closest: str, rivals: list, n_levels: int, inseparable: list,
+             unfit: list = ()) -> str:
+    """One paragraph naming the cause in plain words (``summary``); ``unfit`` the
+    candidates with more parameters than data."""
     chi = params.get("chi", float("nan"))
-    if cause == "none":
-        return (f"The base model (one micro-slip Iwan joint, slip amplitude proportional "
-                f"to the excitation, chi = {chi:.3f}) explains the frequency drop and the "
-                f"damping growth together within the noise: no extension earned its "
-                f"extra parameters.")
-    text = {
-        "macro-slip": (
-            f"At the top levels the joint leaves micro-slip: the frequency drop and the "
-            f"damping growth bend away from the power law, as when the slip amplitude "
-            f"passes phi_max (top level at {params.get('x_top', float('nan')):.2f} "
-            f"phi_max, Dirac weight beta = {params.get('beta', float('nan')):.2g})."),
-        "nonproportional-amplitude": (
-            f"The joint amplitude does not grow in proportion to the excitation: the "
-            f"frequency drop, the damping growth and the measured response amplitude "
-            f"all say that at the top level it is "
-            f"{100 * params.get('amplitude_shortfall_top', float('nan')):.1f} % short of "
-            f"proportional (exciter force drop-out or damping growth)."),
-        "geometric-hardening": (
-            f"A hardening stiffness that grows with the amplitude squared lifts the "
-            f"natural frequency against the Iwan softening (omega^2 + "
-            f"{params.get('h_top', float('nan')):.3g} rad^2/s^2 at the top level); the "
-            f"damping is unaffected."),
-        "thermal-drift": (
-            f"The natural frequency drifts with the order in which the levels were run "
-            f"({params.get('d', float('nan')):.3g} rad^2/s^2 per run), not with the "
-            f"amplitude; the damping is unaffected."),
-        "quadratic-damping": (
-            f"The damping grows faster than the Iwan law tied to the frequency drop "
-            f"allows: an extra damping proportional to the amplitude (air, "
-            f"viscoelastic glue) adds {params.get('q_top', float('nan')):.3g} to zeta at "
-            f"the top level."),
-    }[cause]
-    return (f"{text} Extending the base model this way cuts the cross-validated "
-            f"prediction error by a factor {gain:.2f} (chi = {chi:.3f}).")
+    g = "n/a" if gain is None else f"{gain:.2g}"
+    if cause == "unexplained":
+        p = "n/a" if test["p_value"] is None else f"{test['p_value']:.2g}"
+        text = (f"No cause of the catalogue, alone or two together, brings the data "
+                f"within their noise: the closest candidate (`{closest}`) leaves an rms "
+                f"residual of {test['rms_standardized']:.3g} noise standard deviations "
+                f"(p = {p}, {test['test']}).")
+        if unfit:
+            text += (f" {len(unfit)} candidate(s) have more parameters than these "
+                     f"{n_levels} levels give data ({', '.join(unfit)}): with more levels "
+                     f"they might explain the data.")
+    elif cause == "none":
+        if contradictions:
+            text = "The base model is kept, but the data contradict it (see contradictions)."
+        elif params.get("kappa1_B", 0.0) <= 0.0:
+            text = ("The data show no amplitude dependence beyond their noise: no joint "
+                    "is visible (kappa1 B = 0).")
+        else:
+            text = (f"The base model (one micro-slip Iwan joint, chi = {chi:.3f}) explains "
+                    f"the frequency drop and the damping growth together within the noise "
+                    f"(rms residual {test['rms_standardized']:.2f} noise standard "
+                    f"deviations): no extension earned its extra parameters.")
+    else:
+        words = "; ".join(CAUSE_WORDS[c] for c in [cause, *also])
+        gain_text = (f"cuts the leave-one-level-out prediction error by a factor {g}"
+                     if gain is not None else "has too many parameters for a "
+                     "leave-one-level-out error on these levels")
+        text = (f"Cause {_fmt_causes(cause, also)}: {words}. The extended model "
+                f"{gain_text} (chi = {chi:.3f}).")
+    if rivals:
+        text += (" Ambiguous: " + ", ".join(f"`{r}`" for r in rivals)
+                 + " explain(s) the data nearly as well.")
+    if inseparable and (cause == "none" or n_levels < 8):
+        pairs = "; ".join(f"{p['causes'][0]} from {p['causes'][1]}" for p in inseparable)
+        text += f" With {n_levels} levels this test cannot separate {pairs}."
+    return text

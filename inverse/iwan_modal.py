@@ -42,14 +42,17 @@ from joints.describing import kappa1, kappa2_exact, kappa2_paper
 EQ45_FACTOR = 2.0
 
 
-def kappa_ratio(chi, method: str = "paper") -> float:
+def kappa_ratio(chi, method: str = "paper"):
     """``kappa2 / |kappa1|`` at ``chi`` (paper eq. A15; printed or exact kappa2).
 
     ``Delta omega^2 = kappa_ratio * Delta c`` (eq. 30, 43). ``paper``: the printed
-    three-term Taylor kappa2 (eq. A12, A15); otherwise the exact one.
+    three-term Taylor kappa2 (eq. A12, A15); otherwise the exact one,
+    ``B(chi+5/2, 1/2) (chi+2)/(chi+1)`` (4 at chi = -1/2). A float for a scalar
+    ``chi``, an array for an array (element-wise).
     """
     k2 = kappa2_paper if method == "paper" else kappa2_exact
-    return float(k2(1.0, chi) / abs(kappa1(1.0, chi)))
+    ratio = k2(1.0, chi) / np.abs(kappa1(1.0, chi))
+    return float(ratio) if np.ndim(ratio) == 0 else np.asarray(ratio, dtype=float)
 
 
 def kappa1_per_R(chi) -> float:

@@ -1,164 +1,134 @@
-"""Pictures of a model-form diagnosis: data, base and extended fits, residuals, evidence.
+"""Pictures of a model-form diagnosis: data, base and extended fits, standardized
+residuals, and the weight of every explanation.
 
-Draws the arrays it is given (matplotlib, Agg backend); computes no physics.
+Draws the arrays it is given (matplotlib, Agg backend); computes no physics. Log axes
+carry at most a handful of labelled ticks (1-2-5 steps, no minor labels), so the
+labels do not overlap at the saved size.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 import matplotlib
 
 matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter  # noqa: E402
 
-__all__ = ["plot_diagnosis_fits", "plot_evidence"]
+__all__ = ["plot_diagnosis_fits", "plot_weights", "log_ticks"]
 
 _BASE = dict(color="tab:blue", lw=1.3, ls="--", marker="s", ms=3.5, mfc="none")
 _EXT = dict(color="tab:red", lw=1.3, ls="-", marker="^", ms=3.5, mfc="none")
 
 
-def plot_diagnosis_fits(
-    excitation,
-    omega2,
-    zeta,
-    base_omega2,
-    base_zeta,
-    extended_omega2,
-    extended_zeta,
-    sigma_omega2: float,
-    sigma_zeta: float,
-    *,
-    response=None,
-    base_response=None,
-    extended_response=None,
-    sigma_response: float | None = None,
-    extended_label: str = "extended",
-    title: str | None = None,
-    path=None,
-) -> Figure:
-    """Data against excitation with both fits (top) and standardized residuals (bottom).
+def log_ticks(ax, x) -> None:
+    """At most about five labelled ticks on a log x axis spanning ``x``."""
+    x = np.asarray(x, float)
+    decades = np.log10(x.max() / x.min()) if x.min() > 0 else 1.0
+    subs = (1.0, 2.0, 5.0) if decades < 2.5 else (1.0,)
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=subs, numticks=6))
+    ax.xaxis.set_minor_locator(LogLocator(base=10.0, subs=np.arange(2, 10), numticks=12))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.2g}"))
+    ax.tick_params(axis="x", labelsize=8)
+
+
+def plot_diagnosis_fits(levels: dict, *, extended_label: str = "extended",
+                        abscissa_label: str = "excitation", title: str | None = None,
+                        path=None) -> Figure:
+    """Data against the held amplitude with both fits (top) and standardized residuals
+    of both fits (bottom), one column per channel.
 
     Parameters
     ----------
-    excitation : array_like (n,)
-        Excitation amplitude per level (any unit proportional to force).
-    omega2, zeta : array_like (n,)
-        Measured natural frequency squared (rad^2/s^2) and damping ratio (fraction).
-    base_omega2, base_zeta, extended_omega2, extended_zeta : array_like (n,)
-        Fitted values of the base and the extended model.
-    sigma_omega2, sigma_zeta : float
-        Noise levels used to standardize the residuals.
-    response, base_response, extended_response : array_like (n,), optional
-        Measured response amplitude and the two models' fitted values (same unit);
-        adds a third column.
-    sigma_response : float, optional
-        Noise level of log(response) (relative), for its residuals.
-    extended_label : str
-        Legend text of the extended model (the cause).
-    title : str, optional
+    levels : dict
+        ``abscissa`` (held amplitude per level), ``omega2`` and ``zeta`` (measured,
+        rad^2/s^2 and fraction), ``base_omega2``, ``base_zeta``, ``extended_omega2``,
+        ``extended_zeta`` (fitted), ``response_amplitude`` with ``base_response`` and
+        ``extended_response`` (or None), ``base_residual`` and ``extended_residual``
+        (n, channels) in noise units, ``channels`` (names).
+    extended_label, abscissa_label, title : str
     path : str or path-like, optional
         Write the figure there (PNG, 150 dpi).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
     """
-    x = np.asarray(excitation, float)
-    cols = 3 if response is not None else 2
-    fig = Figure(figsize=(4.4 * cols, 6.4), constrained_layout=True)
-    axes = fig.subplots(2, cols, sharex=True, gridspec_kw=dict(height_ratios=[3, 2]))
-    panels = [
-        ("omega2 - omega2[1]  [rad$^2$/s$^2$]", omega2, base_omega2, extended_omega2,
-         sigma_omega2, float(np.asarray(omega2, float)[0]), 1.0, False),
-        ("zeta  [%]", zeta, base_zeta, extended_zeta, sigma_zeta, 0.0, 100.0, False),
-    ]
-    if response is not None:
-        panels.append(("response / excitation (relative)", response, base_response,
-                       extended_response, sigma_response, 0.0, 1.0, True))
-    for j, (label, y, yb, ye, sig, offset, scale, ratio) in enumerate(panels):
-        y, yb, ye = (np.asarray(v, float) for v in (y, yb, ye))
+    x = np.asarray(levels["abscissa"], float)
+    w1 = float(np.asarray(levels["omega2"], float)[0])
+
+    def freq_pct(v):
+        return 100.0 * (np.sqrt(np.asarray(v, float) / w1) - 1.0)
+
+    panels = [("frequency change [%]", freq_pct, "omega2"),
+              ("damping ratio [%]", lambda v: 100.0 * np.asarray(v, float), "zeta")]
+    if levels.get("response_amplitude") is not None and "response" in levels["channels"]:
+        r0 = float(levels["response_amplitude"][0] / x[0])
+        panels.append(("response / held level (rel.)",
+                       lambda v: np.asarray(v, float) / x / r0, "response"))
+    cols = len(panels)
+    fig = Figure(figsize=(4.0 * cols + 0.6, 6.0), constrained_layout=True)
+    axes = fig.subplots(2, cols, sharex="col", squeeze=False,
+                        gridspec_kw=dict(height_ratios=[3, 2]))
+    key = {"omega2": "omega2", "zeta": "zeta", "response": "response_amplitude"}
+    fit_key = {"omega2": "omega2", "zeta": "zeta", "response": "response"}
+    for j, (label, show, ch) in enumerate(panels):
         top, bottom = axes[0, j], axes[1, j]
-        if ratio:
-            norm = y[0] / x[0]
-            show = lambda v: v / x / norm  # noqa: E731
-            res_b, res_e = np.log(y / yb) / sig, np.log(y / ye) / sig
-        else:
-            show = lambda v: (v - offset) * scale  # noqa: E731
-            res_b, res_e = (y - yb) / sig, (y - ye) / sig
-        top.plot(x, show(y), "ko", ms=4, label="data", zorder=3)
-        top.plot(x, show(yb), label="base (micro-slip Iwan)", **_BASE)
-        top.plot(x, show(ye), label=extended_label, **_EXT)
-        top.set_ylabel(label)
+        top.plot(x, show(levels[key[ch]]), "ko", ms=4, label="data", zorder=3)
+        top.plot(x, show(levels[f"base_{fit_key[ch]}"]), label="base (micro-slip Iwan)",
+                 **_BASE)
+        top.plot(x, show(levels[f"extended_{fit_key[ch]}"]), label=extended_label, **_EXT)
+        top.set_ylabel(label, fontsize=9)
+        top.set_xscale("log")
         top.grid(True, alpha=0.3)
+        top.tick_params(labelsize=8)
+        i = levels["channels"].index(ch)
         bottom.axhspan(-2, 2, color="0.9", zorder=0)
-        bottom.plot(x, res_b, **_BASE)
-        bottom.plot(x, res_e, **_EXT)
+        bottom.plot(x, np.asarray(levels["base_residual"])[:, i], **_BASE)
+        bottom.plot(x, np.asarray(levels["extended_residual"])[:, i], **_EXT)
         bottom.axhline(0.0, color="k", lw=0.8)
-        bottom.set_ylabel("residual / sigma")
-        bottom.set_xlabel("excitation")
+        bottom.set_ylabel("residual / noise", fontsize=9)
+        bottom.set_xlabel(abscissa_label, fontsize=9)
         bottom.set_xscale("log")
         bottom.grid(True, alpha=0.3)
-    axes[0, 0].legend(fontsize=8)
+        bottom.tick_params(labelsize=8)
+        log_ticks(bottom, x)
+        log_ticks(top, x)
+    axes[0, 0].legend(fontsize=7, loc="best")
     if title:
-        fig.suptitle(title)
+        fig.suptitle(title, fontsize=10)
     if path is not None:
         fig.savefig(path, dpi=150)
     return fig
 
 
-def plot_evidence(
-    names: Sequence[str],
-    delta_aicc: Sequence[float],
-    threshold: float,
-    *,
-    chosen: str | None = None,
-    cv_gain: Mapping[str, float] | None = None,
-    title: str | None = None,
-    path=None,
-) -> Figure:
-    """Bar chart of the AICc drop of every candidate against the base model.
+def plot_weights(names: Sequence[str], weights: Sequence[float], *, named: str | None = None,
+                 gains: Sequence[float | None] | None = None, title: str | None = None,
+                 path=None) -> Figure:
+    """Horizontal bars: the weight of each explanation (named one in red), with its
+    cross-validated gain written beside the bar.
 
     Parameters
     ----------
-    names : sequence of str
-        Candidate causes.
-    delta_aicc : sequence of float
-        AICc(base) - AICc(candidate); NaN for an unavailable candidate.
-    threshold : float
-        Drop a candidate must exceed to be named (dashed line).
-    chosen : str, optional
-        The named cause (drawn in red).
-    cv_gain : mapping name -> float, optional
-        Cross-validation gains written above the bars.
-    title : str, optional
-    path : str or path-like, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
+    names : explanation labels ("none", "a", "a+b"); weights : their weights (0..1);
+    named : the label drawn in red; gains : gain per explanation (None: not shown);
+    title : str; path : PNG file (150 dpi).
     """
-    fig = Figure(figsize=(6.4, 3.6), constrained_layout=True)
+    n = len(names)
+    fig = Figure(figsize=(7.0, 1.0 + 0.32 * n), constrained_layout=True)
     ax = fig.add_subplot()
-    d = np.asarray(delta_aicc, float)
-    pos = np.arange(len(names))
-    colors = ["tab:red" if n == chosen else "0.6" for n in names]
-    shown = np.where(np.isfinite(d), d, 0.0)
-    ax.bar(pos, shown, color=colors)
-    ax.axhline(threshold, color="k", ls="--", lw=1, label=f"threshold {threshold:g}")
-    ax.axhline(0.0, color="k", lw=0.8)
-    for i, n in enumerate(names):
-        if not np.isfinite(d[i]):
-            ax.text(i, 0.0, "n/a", ha="center", va="bottom", fontsize=8)
-        elif cv_gain and n in cv_gain:
-            ax.text(i, shown[i], f"gain {cv_gain[n]:.2f}", ha="center",
-                    va="bottom" if shown[i] >= 0 else "top", fontsize=8)
-    ax.set_xticks(pos)
-    ax.set_xticklabels(names, rotation=20, ha="right", fontsize=8)
-    ax.set_ylabel("AICc(base) - AICc(candidate)")
-    ax.legend(fontsize=8)
+    pos = np.arange(n)[::-1]
+    colors = ["tab:red" if nm == named else "0.6" for nm in names]
+    ax.barh(pos, weights, color=colors)
+    for p, w, g in zip(pos, weights, gains if gains is not None else [None] * n):
+        txt = f"{w:.3f}" + ("" if g is None else f"  (gain {g:.2g})")
+        ax.text(min(w, 1.0) + 0.01, p, txt, va="center", fontsize=7)
+    ax.set_yticks(pos)
+    ax.set_yticklabels([nm.replace("+", " +\n") if len(nm) > 30 else nm for nm in names],
+                       fontsize=7)
+    ax.set_xlim(0.0, 1.25)
+    ax.set_xlabel("weight (Akaike, with the cost per cause)", fontsize=8)
+    ax.tick_params(axis="x", labelsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, fontsize=9)
     if path is not None:
         fig.savefig(path, dpi=150)
     return fig

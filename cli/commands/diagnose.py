@@ -1,25 +1,24 @@
-"""``iwanfe diagnose``: what the Iwan modal model gets wrong, the cause, and the gain.
+"""``iwanfe diagnose``: what the Iwan modal model gets wrong, the cause(s), and the gain.
 
-Reads a measured-data CSV (``shared/spec/measured-data.md``), fits the base model (one
-micro-slip Iwan joint, amplitude proportional to excitation, frequency drop and damping
-growth tied through chi) and one extension per cause of ``shared/spec/diagnosis.md``,
-names the cause that earns its extra parameters (AICc drop and a cross-validated gain)
-or ``none``, and reports the base and extended errors on held-out levels.
+Reads a measured-data CSV (``shared/spec/measured-data.md``) and runs
+:func:`inverse.diagnose.diagnose` (``shared/spec/diagnosis.md`` v2): the base model
+(one micro-slip Iwan joint), each cause of the catalogue and every pair, weighed by
+AIC against the noise of the data; contradictions stated with numbers; ``none`` /
+a cause (+ ``also``) / ``unexplained``; errors on held-out levels.
 """
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
-
-import numpy as np
 
 from cli import validate
 from cases.registry import CASES, MEASURED_DATA, fe_check
 from cli.series_options import add_series_arguments, series_from_args
-from inverse.diagnose import AICC_THRESHOLD, CANDIDATES, diagnose
 from ident.errors import InputError
-from runs.jsonio import print_json, to_jsonable
 from ident.measured import read_measured
+from inverse.diagnose import T_CAUSE, W_AMBIGUOUS, diagnose
+from runs.jsonio import print_json, to_jsonable
 
 NAME = "diagnose"
 
@@ -29,28 +28,30 @@ def register(subparsers) -> None:
         NAME,
         help="name what the Iwan model gets wrong in amplitude-dependent modal data",
         description=(
-            "Fit the base model (one micro-slip four-parameter Iwan joint on the mode, "
-            "joint amplitude proportional to the excitation; frequency drop and damping "
-            "growth tied by the exact kappa2/|kappa1| of chi) jointly to omega2 and zeta, "
-            "and one extension per cause: macro-slip, nonproportional-amplitude, "
-            "geometric-hardening, thermal-drift, quadratic-damping. The cause is the "
-            "extension with the largest AICc drop, if it exceeds "
-            f"{AICC_THRESHOLD:g} and lowers the leave-one-level-out prediction error; "
-            "else none. Errors are rms held-out prediction errors in noise units."),
+            "Fit the base model (one micro-slip four-parameter Iwan joint on the mode; "
+            "frequency drop and damping growth tied by the exact kappa2/|kappa1| of "
+            "chi), each cause of the catalogue (macro-slip, nonproportional-amplitude, "
+            "geometric-hardening, thermal-drift, quadratic-damping) and every pair of "
+            "them, against the noise of the data (the identification's stds, else the "
+            "level-to-level scatter). Weights are Akaike weights with a cost of "
+            f"{T_CAUSE:g} in AIC per cause; an explanation with at least "
+            f"{W_AMBIGUOUS:.2g} of the named one's weight makes it ambiguous. "
+            "Contradictions with the Iwan model are stated with numbers; when no "
+            "candidate brings the data within their noise the cause is unexplained. "
+            "Errors: rms standardized prediction errors on held-out levels."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_series_arguments(parser, required=False)   # FILE...: a table or FRF files
     parser.add_argument("--case", default=None, metavar="NAME",
                         help="instead of FILE: 'double-beam' (the shipped paper data) or "
-                             "'synthetic:CAUSE:SEED' (a simulated test hiding CAUSE)")
+                             "'synthetic:LABEL:SEED' (a simulated, identified series hiding "
+                             "LABEL: none, a cause, two causes joined by '+', or "
+                             "out-of-catalogue); with FILE: a model case for its FE check")
     parser.add_argument("--mode", type=int, default=None,
                         help="mode label in the file (default: the only/first one)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="write report.md, diagnosis.json and the PNG figures there")
-    parser.add_argument("--cv-all", action="store_true",
-                        help="cross-validate every candidate, not only those past the "
-                             "AICc threshold")
     parser.set_defaults(func=run)
 
 
@@ -71,56 +72,77 @@ def load(file: str | None, case: str | None, args=None):
         return read_measured(MEASURED_DATA[case]), None
     parts = case.split(":")
     if len(parts) == 3 and parts[0] == "synthetic":
-        from cases.synthetic import CAUSES, generate_case
+        from cases.synthetic_series import generate_series, truth_of
 
-        if parts[1] not in CAUSES:
-            raise InputError(f"--case: unknown cause {parts[1]!r}; choose from "
-                             f"{', '.join(CAUSES)}")
         try:
+            truth_of(parts[1])
             seed = int(parts[2])
-        except ValueError:
-            raise InputError(f"--case: seed must be an integer, got {parts[2]!r}") from None
-        c = generate_case(parts[1], seed)
-        return c.data, {"cause": c.cause, "seed": seed,
-                        "effect_size": c.truth["effect_sigma"], "chi": c.truth["chi"]}
+        except ValueError as exc:
+            raise InputError(f"--case: {exc}" if "label" in str(exc) else
+                             f"--case: seed must be an integer, got {parts[2]!r}") from None
+        s = generate_series(parts[1], seed)
+        return s.data, {"label": parts[1], "seed": seed, "causes": list(s.truth["causes"]),
+                        "chi": s.truth["chi"], "out_of_catalogue": s.truth["ooc"]}
     raise InputError(f"--case: unknown case {case!r}; use "
-                     f"{', '.join(MEASURED_DATA)} or synthetic:CAUSE:SEED")
+                     f"{', '.join(MEASURED_DATA)} or synthetic:LABEL:SEED")
 
 
 def _fmt(v) -> str:
-    if isinstance(v, float):
-        return f"{v:.6g}"
-    return str(v)
+    if v is None:
+        return "n/a"
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
 
 
-def format_text(result: dict, source: str) -> str:
+def _g(v, spec=".3g"):
+    return "n/a" if v is None else format(v, spec)
+
+
+def format_text(r: dict, source: str) -> str:
     """Human-readable summary of a diagnosis."""
-    r = result
-    lines = [f"{source}: mode {r['mode']}",
-             f"cause: {r['cause']}",
-             f"  {r['summary']}",
-             f"base error {r['base_error']:.3f}, extended error {r['extended_error']:.3f}, "
-             f"gain {r['gain']:.3f}  ({r['error_measure']})",
-             "parameters (" + r["parameters"]["model"] + "):"]
-    for k, v in r["parameters"].items():
-        if k != "model":
-            lines.append(f"  {k:24s} {_fmt(v)}")
-    lines.append(f"evidence (AICc drop vs base; named if > {r['aicc_threshold']:g} and "
-                 f"cv gain > 1):")
-    for c in CANDIDATES:
-        e = r["evidence"][c]
+    lines = [f"{source}: mode {r['mode']} ({r['control']} control, "
+             f"{len(r['levels']['level'])} levels)",
+             f"cause: {r['cause']}" + (f"   also: {', '.join(r['also'])}" if r["also"] else "")
+             + f"   ambiguous: {'yes' if r['ambiguous'] else 'no'}",
+             f"  {r['summary']}"]
+    if r["ambiguity"]:
+        for name, w, how in zip(r["ambiguity"]["between"][1:], r["ambiguity"]["weights"][1:],
+                                r["ambiguity"]["measurement"]):
+            lines.append(f"  rival {name} (weight {w:.2f}): to separate, {how}")
+    if r["contradictions"]:
+        lines.append("contradictions (what no micro-slip Iwan joint can do):")
+        lines += [f"  - {c}" for c in r["contradictions"]]
+    lines.append(f"errors on held-out levels: base {_g(r['base_error'])}, extended "
+                 f"{_g(r['extended_error'])}, gain {_g(r['gain'])} (leave one level out); "
+                 f"top levels held out: gain {_g(r['gain_held_out'])}")
+    lines.append(f"  ({r['error_measure']})")
+    ft = r["fit_test"]
+    lines.append(f"fit of {ft['model']}: rms residual {ft['rms_standardized']:.3g} noise "
+                 f"standard deviations, p = {_g(ft['p_value'], '.2g')} ({ft['test']})")
+    lines.append(f"parameters ({r['parameters']['model']}; fitted to this series):")
+    lines += [f"  {k:24s} {_fmt(v)}" for k, v in r["parameters"].items() if k != "model"]
+    lines.append("candidates (weight: Akaike weight with the cost per cause; dAIC: AIC of "
+                 "none minus the candidate's; p: fit test):")
+    ranked = sorted(r["evidence"].items(), key=lambda kv: -kv[1]["weight"])
+    for name, e in ranked:
         if not e["available"]:
-            lines.append(f"  {c:26s} n/a ({e['reason']})")
+            lines.append(f"  {name:46s} n/a ({e['reason']})")
             continue
-        cv = f"  cv gain {e['cv_gain']:.3f}" if "cv_gain" in e else ""
-        lines.append(f"  {c:26s} dAICc {e['delta_aicc']:8.2f}  dBIC {e['delta_bic']:8.2f}"
-                     f"  +{e['extra_parameters']} par{cv}")
-    for w in r["data_warnings"]:
-        lines.append(f"warning: {w}")
+        gain = next((a["gain"] for a in r["alternatives"] if a["causes"] == e["causes"]), None)
+        lines.append(f"  {name:46s} w {e['weight']:.3f}  dAIC {_g(e['delta_aic'], '8.1f')}  "
+                     f"k {e['n_params']:2d}  p {_g(e['p_value'], '.2g'):>7}  gain {_g(gain)}")
+    sep = r["separability"]
+    for p in sep["inseparable"]:
+        lines.append(f"cannot separate {p['causes'][0]} from {p['causes'][1]} with these "
+                     f"levels: {p['measurement']}")
+    for c, why in sep["untestable"].items():
+        lines.append(f"not tested: {c} ({why})")
+    n = r["noise"]
+    lines.append("noise: " + ", ".join(f"{c} from {s}" for c, s in n["source"].items()))
+    lines += [f"warning: {w}" for w in r["data_warnings"]]
     if "synthetic_truth" in r:
         t = r["synthetic_truth"]
-        lines.append(f"synthetic truth: cause {t['cause']}, effect size "
-                     f"{t['effect_size']:.3g}, chi {t['chi']:.3f}")
+        lines.append(f"synthetic truth: {t['label']} (named should be "
+                     f"{', '.join(t['causes']) or 'none'}), chi {t['chi']:.3f}")
     if "fe_check" in r:
         from cases.double_beam.fe_check import format_fe_check
 
@@ -133,97 +155,27 @@ def format_text(result: dict, source: str) -> str:
 
 def write_report(result: dict, out: Path, source: str) -> list[Path]:
     """Write report.md, diagnosis.json, diagnosis_fits.png and diagnosis_evidence.png."""
-    import json
-
-    from viz.diagnosis_plots import plot_diagnosis_fits, plot_evidence
+    from cli.commands.diagnose_report import markdown
+    from viz.diagnosis_plots import plot_diagnosis_fits, plot_weights
 
     out.mkdir(parents=True, exist_ok=True)
     r, lv = result, result["levels"]
-    noise = r["noise"]
-    resp = lv["response_amplitude"]
-    kw = {}
-    if resp is not None:
-        kw = dict(response=resp, base_response=np.exp(lv["base_log_response"]),
-                  extended_response=np.exp(lv["extended_log_response"]),
-                  sigma_response=noise["sigma_response"])
     fits_png = out / "diagnosis_fits.png"
-    plot_diagnosis_fits(lv["excitation"], lv["omega2"], lv["zeta"], lv["base_omega2"],
-                        lv["base_zeta"], lv["extended_omega2"], lv["extended_zeta"],
-                        noise["sigma_omega2"], noise["sigma_zeta"],
-                        extended_label=f"extended: {r['cause']}",
-                        title=f"{source}, mode {r['mode']}: cause = {r['cause']}",
-                        path=fits_png, **kw)
+    plot_diagnosis_fits(lv, extended_label=f"extended: {r['parameters']['model']}",
+                        abscissa_label=("response amplitude" if r["control"] == "response"
+                                        else "excitation"),
+                        title=f"{source}, mode {r['mode']}: cause = {r['cause']}"
+                        + (f" + {', '.join(r['also'])}" if r["also"] else ""),
+                        path=fits_png)
     ev_png = out / "diagnosis_evidence.png"
-    names = list(CANDIDATES)
-    d = [r["evidence"][c].get("delta_aicc", np.nan) for c in names]
-    gains = {c: r["evidence"][c]["cv_gain"] for c in names if "cv_gain" in r["evidence"][c]}
-    plot_evidence(names, d, r["aicc_threshold"], chosen=r["cause"], cv_gain=gains,
-                  title="evidence against the base model", path=ev_png)
+    alts = r["alternatives"][:8]
+    plot_weights(["+".join(a["causes"]) for a in alts], [a["weight"] for a in alts],
+                 named=r["parameters"]["model"], gains=[a["gain"] for a in alts],
+                 title="weight of each explanation", path=ev_png)
     json_path = out / "diagnosis.json"
     json_path.write_text(json.dumps(to_jsonable(r), indent=2) + "\n", encoding="utf-8")
-
-    rows = "\n".join(f"| {k} | {_fmt(v)} |" for k, v in r["parameters"].items()
-                     if k != "model")
-    ev_rows = []
-    for c in names:
-        e = r["evidence"][c]
-        if not e["available"]:
-            ev_rows.append(f"| {c} | n/a | n/a | | {e['reason']} |")
-        else:
-            g = f"{e['cv_gain']:.3f}" if "cv_gain" in e else ""
-            ev_rows.append(f"| {c} | {e['delta_aicc']:.2f} | {e['delta_bic']:.2f} | {g} | "
-                           f"+{e['extra_parameters']} parameters |")
-    warn = "\n".join(f"- {w}" for w in r["data_warnings"]) or "- none"
-    md = f"""# Diagnosis of {source}, mode {r['mode']}
-
-**Cause: `{r['cause']}`**
-
-{r['summary']}
-
-| | value |
-| --- | --- |
-| base error | {r['base_error']:.3f} |
-| extended error | {r['extended_error']:.3f} |
-| gain (base / extended) | {r['gain']:.3f} |
-
-Error measure: {r['error_measure']}. Noise levels (from the `{noise['from_model']}`
-fit): sigma_omega2 = {noise['sigma_omega2']:.4g} rad^2/s^2, sigma_zeta =
-{noise['sigma_zeta']:.3g}.
-
-## Parameters of the {'base' if r['cause'] == 'none' else 'extended'} model (`{r['parameters']['model']}`)
-
-| parameter | value |
-| --- | --- |
-{rows}
-
-## Evidence (every candidate against the base)
-
-A cause is named when its AICc drop exceeds {r['aicc_threshold']:g} and its
-cross-validated error is below the base model's.
-
-| candidate | AICc drop | BIC drop | cv gain | note |
-| --- | --- | --- | --- | --- |
-{chr(10).join(ev_rows)}
-
-![evidence](diagnosis_evidence.png)
-
-## Data, fits and residuals
-
-Top: data (black), base model (blue dashed), extended model (red). Bottom: residuals
-in units of the noise level (grey band: +/- 2).
-
-![fits](diagnosis_fits.png)
-
-## Data warnings
-
-{warn}
-"""
-    if "fe_check" in r:
-        from cases.double_beam.fe_check import format_fe_check_md
-
-        md += "\n" + format_fe_check_md(r["fe_check"])
     report = out / "report.md"
-    report.write_text(md, encoding="utf-8")
+    report.write_text(markdown(r, source), encoding="utf-8")
     return [report, json_path, fits_png, ev_png]
 
 
@@ -233,11 +185,11 @@ def run(args) -> int:
     args.file = " ".join(args.files) or None
     data, truth = load(args.file, args.case, args)
     source = args.file or args.case
-    result = diagnose(data, mode=args.mode, cv_all=args.cv_all)
+    result = diagnose(data, mode=args.mode)
     if truth is not None:
         result["synthetic_truth"] = truth
     if args.case in CASES:  # a model case: its FE-level check
-        level1 = data.for_mode(result["mode"]) if "mode" in result else data
+        level1 = data.for_mode(result["mode"])
         result["fe_check"] = fe_check(args.case, float(level1.omega2[0]))
     if args.case == "double-beam":  # the FE model refitted, base vs extended (issue 13)
         from cases.double_beam.fe_diagnosis_report import add_fe_diagnosis
