@@ -94,7 +94,7 @@ class HBSolution:
         return model.expand(self.q[i1])
 
 
-def _synthesis(harmonics, n_time):
+def harmonic_synthesis(harmonics, n_time):
     """Real synthesis ``E`` (n_time, n_c) and analysis ``P`` (n_c, n_time) matrices for
     the real unknowns ``[Re X_h, Im X_h]`` (``Im X_0`` dropped); ``P E = I``.
     Cached (read-only arrays)."""
@@ -204,7 +204,7 @@ class _Balance:
 
     def __init__(self, model: ReducedModel, bank: JointBank, op: HBOperator, n_time: int):
         self.op, self.bank, self.K_T = op, bank, model.K_T
-        self.E, self.P = _synthesis(op.h, n_time)
+        self.E, self.P = harmonic_synthesis(op.h, n_time)
         self.eye_c = np.eye(op.nc)
         self.eye_y = np.eye(op.nc * op.nj)
         self.lam = 1.0

@@ -6,7 +6,7 @@ harmonic the slips are sinusoids and the joint force harmonic is exactly the des
 function of :func:`joints.describing.describing_function`
 (``F_1 = (k_in(A) + i k_q(A)) S_1``), so there is neither a slider discretization nor
 time sampling; Newton uses the analytic derivative of the describing function
-(:func:`_iwan_df`). :func:`continuation_exact` follows it over frequency lines.
+(:func:`iwan_describing`). :func:`continuation_exact` follows it over frequency lines.
 
 SI units: rad/s, m, N.
 """
@@ -23,8 +23,8 @@ from joints.iwan import IwanParameters
 __all__ = ["solve_hb_exact", "continuation_exact"]
 
 
-class _ExactIwan:
-    """Per-joint arrays of four-parameter Iwan joints for :func:`_iwan_df`."""
+class ExactIwanJoints:
+    """Per-joint arrays of four-parameter Iwan joints for :func:`iwan_describing`."""
 
     def __init__(self, joints, n_joints: int):
         if isinstance(joints, IwanParameters):
@@ -45,7 +45,7 @@ class _ExactIwan:
         self.q_micro = 4.0 * self.R / (np.pi * (self.chi + 2.0) * (self.chi + 3.0))
 
 
-def _iwan_df(J: _ExactIwan, A):
+def iwan_describing(J: ExactIwanJoints, A):
     """Exact describing function of each joint at slip amplitudes ``A`` (n_joints,) and
     its derivative in ``A``: ``(k_in, k_q, dk_in/dA, dk_q/dA)`` (N/m, N/m^2).
 
@@ -88,7 +88,7 @@ def _iwan_df(J: _ExactIwan, A):
 
 def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float = 1e-13,
                    max_iter: int = 60, guess: np.ndarray | None = None,
-                   _prepared: _ExactIwan | None = None) -> HBSolution:
+                   _prepared: ExactIwanJoints | None = None) -> HBSolution:
     """First-harmonic balance with the exact continuous Iwan joints (describing function).
 
     With one harmonic every joint slip is a sinusoid ``s_j = Re(S_j e^{i w t})`` and the
@@ -96,7 +96,7 @@ def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float =
     ``F_j = (k_in(|S_j|) + i k_q(|S_j|)) S_j`` (:func:`joints.describing.describing_function`;
     paper eq. 14 in micro-slip), so ``g_j = F_j - K_T S_j`` and the condensed equations
     ``S = S_lin - R_1 N(S)`` (module docstring) are solved by Newton's method with the
-    analytic derivative of the describing function (:func:`_iwan_df`). No slider
+    analytic derivative of the describing function (:func:`iwan_describing`). No slider
     discretization and no time sampling: the only error is the truncation to the first
     harmonic.
 
@@ -120,7 +120,7 @@ def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float =
         ``harmonics = [1]``; ``slip_amplitude = |S_1|``.
     """
     nj = model.n_joints
-    J = _ExactIwan(joints, nj) if _prepared is None else _prepared
+    J = ExactIwanJoints(joints, nj) if _prepared is None else _prepared
     check_joint_stiffness(J.K_T, model)
     op = HBOperator(model, load, omega, None, harmonics=np.array([1]))
     R1 = op.R[0]
@@ -139,7 +139,7 @@ def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float =
     it, upd = 0, np.inf
     for it in range(1, max_iter + 1):
         A = np.abs(S)
-        k_in, k_q, dk_in, dk_q = _iwan_df(J, A)
+        k_in, k_q, dk_in, dk_q = iwan_describing(J, A)
         kap = (k_in - J.K_T) + 1j * k_q
         N = kap * S
         res = S - S_lin + R1 @ N
@@ -163,7 +163,7 @@ def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float =
         raise RuntimeError(f"describing-function balance did not converge at "
                            f"{omega / (2 * np.pi):.4g} Hz (relative update {upd:.2e})")
     A = np.abs(S)
-    k_in, k_q, _, _ = _iwan_df(J, A)
+    k_in, k_q, _, _ = iwan_describing(J, A)
     N = ((k_in - J.K_T) + 1j * k_q) * S
     q = op.Xp[0] - op.XG[0] @ N
     return HBSolution(omega=float(omega), harmonics=np.array([1]), slip=S[None, :],
@@ -175,6 +175,6 @@ def continuation_exact(model: ReducedModel, joints, load, omegas, tol: float = 1
                        progress=None) -> list[HBSolution]:
     """:func:`fe.harmonic_balance.continuation` for :func:`solve_hb_exact` (exact Iwan
     joints, first harmonic)."""
-    J = _ExactIwan(joints, model.n_joints)
+    J = ExactIwanJoints(joints, model.n_joints)
     return natural_continuation(lambda w, guess: solve_hb_exact(
         model, joints, load, w, tol, guess=guess, _prepared=J), omegas, progress)

@@ -2,7 +2,7 @@
 
 The condensed first-harmonic equations of :mod:`fe.harmonic_balance` and
 :mod:`fe.hb_exact` (continuous Iwan joints through their exact describing function,
-:func:`fe.hb_exact._iwan_df`), solved for all force levels of a stepped-sine campaign
+:func:`fe.hb_exact.iwan_describing`), solved for all force levels of a stepped-sine campaign
 in one vectorized Newton iteration, on a reduced model in modal form (``M = I``, ``K``
 and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds it), where
 ``D(w) = diag(a k_r - w^2 + i w c_r)`` is inverted element by element. Besides the
@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fe.hb_exact import _ExactIwan, _iwan_df
+from fe.hb_exact import ExactIwanJoints, iwan_describing
 from fe.reduction import ReducedModel
 
 __all__ = ["CubicSpring", "QuadraticDamper", "ResonanceLevels", "resonance_levels",
@@ -105,7 +105,7 @@ class _Balance:
             raise ValueError("the batched first-harmonic balance needs a reduced model in "
                              "modal form (M = I, K and C diagonal): fe.reduction.ritz_basis")
         self.k, self.c = np.diag(K).copy(), np.diag(C).copy()
-        self.J = joints if isinstance(joints, _ExactIwan) else _ExactIwan(joints, model.n_joints)
+        self.J = joints if isinstance(joints, ExactIwanJoints) else ExactIwanJoints(joints, model.n_joints)
         if np.any(np.abs(self.J.K_T - model.K_T) > 1e-9 * np.abs(model.K_T)):
             raise ValueError("joint stiffness does not match the model's K_T")
         self.elements = list(elements)
@@ -135,7 +135,7 @@ class _Balance:
         A = np.maximum(np.abs(Y), 1e-300)
         nj = self.nj
         kin, kq, dkin, dkq = (np.empty_like(A) for _ in range(4))
-        ki, qj, dki, dqj = _iwan_df(self.J, A[:, :nj])        # broadcasts over levels
+        ki, qj, dki, dqj = iwan_describing(self.J, A[:, :nj])        # broadcasts over levels
         a = self.a[:, None]
         kin[:, :nj] = a * (ki - self.J.K_T)
         kq[:, :nj] = a * qj

@@ -13,7 +13,7 @@ amplitudes. Two paths, each reusing the project's one implementation:
   any set of harmonics;
 * :class:`ExactHarmonics`: continuous four-parameter Iwan joints, first harmonic only,
   through the exact describing function and its analytic derivative
-  (:func:`fe.hb_exact._iwan_df`): ``G_1 = (k_in(|S|) - K_T + i k_q(|S|)) S``.
+  (:func:`fe.hb_exact.iwan_describing`): ``G_1 = (k_in(|S|) - K_T + i k_q(|S|)) S``.
 
 Joints are independent: the Jacobian is block diagonal, one (n_c, n_c) block per joint.
 SI units: m, N.
@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from fe.aft import aft_joint_force
-from fe.harmonic_balance import _synthesis
-from fe.hb_exact import _ExactIwan, _iwan_df
+from fe.harmonic_balance import harmonic_synthesis
+from fe.hb_exact import ExactIwanJoints, iwan_describing
 from fe.reduction import JointBank
 from joints.iwan import IwanParameters
 
@@ -42,7 +42,7 @@ class BankHarmonics:
         self.harmonics = np.asarray(harmonics, dtype=int)
         if np.any(self.harmonics < 1):
             raise ValueError("BankHarmonics: harmonics must be >= 1 (no static term)")
-        self.E, self.P = _synthesis(self.harmonics, int(n_time))
+        self.E, self.P = harmonic_synthesis(self.harmonics, int(n_time))
         self.nc = self.E.shape[1]
         self.K_T = bank.K_T
         self._eye = np.eye(self.nc)
@@ -67,7 +67,7 @@ class ExactHarmonics:
     nc = 2
 
     def __init__(self, joints, n_joints: int):
-        self.iwan = _ExactIwan(joints, int(n_joints))
+        self.iwan = ExactIwanJoints(joints, int(n_joints))
         self.K_T = self.iwan.K_T
 
     @property
@@ -81,7 +81,7 @@ class ExactHarmonics:
         """As :meth:`BankHarmonics.__call__`; the amplitude is ``|S_1|``."""
         S = Y[0] + 1j * Y[1]
         A = np.abs(S)
-        k_in, k_q, dk_in, dk_q = _iwan_df(self.iwan, A)
+        k_in, k_q, dk_in, dk_q = iwan_describing(self.iwan, A)
         kap = (k_in - self.K_T) + 1j * k_q
         N = kap * S
         G = np.array([N.real, N.imag])

@@ -5,7 +5,7 @@ from scipy.optimize import brentq
 
 from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from fe.aft import aft_joint_force
-from fe.harmonic_balance import HBSettings, _synthesis, solve_hb
+from fe.harmonic_balance import HBSettings, harmonic_synthesis, solve_hb
 from fe.newmark import NewmarkSettings, integrate
 from fe.reduction import JointBank, JointedSystem, reduced_basis
 from joints.describing import describing_function
@@ -36,7 +36,7 @@ def test_aft_jacobian_matches_reference_and_finite_differences(lumped):
     rng = np.random.default_rng(7)
     st = np.array([1e-3 * np.sin(th) + 2e-4 * np.sin(3 * th + rng.uniform()) + 1e-4,
                    5e-4 * np.cos(th + rng.uniform())])
-    E, P = _synthesis(np.array([1, 3, 5]), N)
+    E, P = harmonic_synthesis(np.array([1, 3, 5]), N)
     F1, J1 = aft_joint_force(st, bank, P, E)
     F2, J2 = aft_joint_force(st, bank, compiled=False)
     np.testing.assert_allclose(F1, F2, rtol=0, atol=1e-9)

@@ -17,7 +17,7 @@ import scipy.sparse as sp
 
 from cases.double_beam.model import DoubleBeamConfig, build_double_beam
 from fe.aft import aft_joint_force
-from fe.harmonic_balance import (HBOperator, HBSettings, _synthesis, _to_real, continuation,
+from fe.harmonic_balance import (HBOperator, HBSettings, harmonic_synthesis, _to_real, continuation,
                                  solve_hb)
 from fe.hb_exact import solve_hb_exact
 from fe.newton_path import SteadyStateError, follow
@@ -52,7 +52,7 @@ def _case(K_T):
 def _balance_residual(red, bank, sol, load, settings):
     """|S - S_lin + R N(S)| / |S| with the reference (numpy) AFT march."""
     op = HBOperator(red, load, sol.omega, settings)
-    E, P = _synthesis(op.h, settings.n_time)
+    E, P = harmonic_synthesis(op.h, settings.n_time)
     y = _to_real(sol.slip, op.h).reshape(-1)
     s_t = (E @ y.reshape(op.nc, op.nj)).T
     F, _ = aft_joint_force(s_t, bank, compiled=False)

@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 from cases.lumped10.model import LumpedParameters, force_vector, lumped10_bank, lumped10_system
 from runs.executor import ExecutorSpec
 from fe.harmonic_balance import HBSettings, solve_hb
-from fe.hb_exact import _ExactIwan, _iwan_df, continuation_exact, solve_hb_exact
+from fe.hb_exact import ExactIwanJoints, iwan_describing, continuation_exact, solve_hb_exact
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, integrate
 from fe.reduction import JointedSystem, full_model, reduced_basis
 from runs.campaign import Campaign, NewmarkProtocol
@@ -152,18 +152,18 @@ def test_full_model_equals_all_modes_basis(lumped):
 
 
 def test_describing_function_derivatives():
-    """_iwan_df equals joints.describing.describing_function (micro and macro-slip, beta > 0
+    """iwan_describing equals joints.describing.describing_function (micro and macro-slip, beta > 0
     and = 0) and its A-derivatives equal central differences."""
     for p in (SDOF_JOINT, IwanParameters(chi=-0.3, K_T=2e7, F_S=90.0, beta=0.0)):
-        J = _ExactIwan([p, p], 2)
+        J = ExactIwanJoints([p, p], 2)
         for x in (0.01, 0.3, 0.97, 1.05, 2.4, 7.0):   # A/2 never at phi_max (kink)
             A = np.array([x, 0.5 * x]) * p.phi_max
-            k_in, k_q, dk_in, dk_q = _iwan_df(J, A)
+            k_in, k_q, dk_in, dk_q = iwan_describing(J, A)
             ref_in, ref_q = describing_function(p, A)
             np.testing.assert_allclose(k_in, ref_in, rtol=1e-14)
             np.testing.assert_allclose(k_q, ref_q, rtol=1e-14)
             h = 1e-6 * A
-            fd = [(a - b) / (2 * h) for a, b in zip(_iwan_df(J, A + h)[:2], _iwan_df(J, A - h)[:2])]
+            fd = [(a - b) / (2 * h) for a, b in zip(iwan_describing(J, A + h)[:2], iwan_describing(J, A - h)[:2])]
             np.testing.assert_allclose(dk_in, fd[0], rtol=1e-6)
             np.testing.assert_allclose(dk_q, fd[1], rtol=1e-6)
 
