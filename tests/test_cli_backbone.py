@@ -94,3 +94,28 @@ def test_reproduce_control_response(capsys, tmp_path):
         assert r["frequency_hz"] == pytest.approx(r["epmc_frequency_hz"], rel=5e-5)
         assert r["zeta"] == pytest.approx(r["epmc_zeta"], rel=5e-3)
     assert abs(rep["estimate"]["chi_error"]) < 0.05
+
+
+def test_diagnose_backbone_predicts_every_level(capsys):
+    """``diagnose FILE --case double-beam --backbone``: the joint estimated from levels 1-7
+    read off the FE backbone at every level: the top three held out, the lowest level at
+    the stuck-glue mode (252.0 Hz calibrated, slip far below phi_max), frequency falling
+    and damping growing with the force (an Iwan joint), slip growing past phi_max only at
+    the top."""
+    from cases.registry import MEASURED_DATA
+
+    code, out, _ = run_cli(capsys, "diagnose", str(MEASURED_DATA["double-beam"]), "--case",
+                           "double-beam", "--backbone", "--json")
+    assert code == 0
+    bb = json.loads(out)["backbone"]
+    lv = bb["levels"]
+    assert [r["held_out"] for r in lv] == [False] * 7 + [True] * 3
+    f = np.sqrt([r["omega2"] for r in lv]) / (2 * np.pi)
+    assert f[0] == pytest.approx(252.0, rel=1e-4)   # stuck 252.0 less 2e-5 of softening
+    assert np.all(np.diff(f) < 0) and np.all(np.diff([r["zeta"] for r in lv]) > 0)
+    assert lv[0]["slip_over_phi_max"] < 1e-2 and lv[-1]["slip_over_phi_max"] > 1.0
+
+
+def test_diagnose_backbone_needs_a_file_and_the_case(capsys):
+    code, _, err = run_cli(capsys, "diagnose", "--case", "double-beam", "--backbone")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--backbone" in err

@@ -49,6 +49,10 @@ def register(subparsers) -> None:
                              "out-of-catalogue); with FILE: a model case for its FE check")
     parser.add_argument("--mode", type=int, default=None,
                         help="mode label in the file (default: the only/first one)")
+    parser.add_argument("--backbone", action="store_true",
+                        help="with FILE and --case double-beam: also predict every level from "
+                             "the FE backbone (EPMC) of the joint estimated from the levels "
+                             "below the top three (iwanfe estimate --backbone)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="write report.md, diagnosis.json and the PNG figures there")
@@ -179,6 +183,25 @@ def write_report(result: dict, out: Path, source: str) -> list[Path]:
     return [report, json_path, fits_png, ev_png]
 
 
+def _backbone_prediction(args, data, mode) -> dict:
+    """``--backbone``: the estimator's joint (method exact, all levels but the top three,
+    B~ from the case's FE model) put into the FE model, every level read off its EPMC
+    backbone (:func:`cases.backbone_prediction.predict_from_backbone`)."""
+    if args.case != "double-beam" or not args.files:
+        raise InputError("--backbone needs FILE and --case double-beam")
+    from cases.backbone_prediction import predict_from_backbone
+    from cases.registry import build_case
+    from inverse.estimate import estimate
+
+    d = data.for_mode(mode)
+    if len(d) < 6:
+        raise InputError(f"--backbone: mode {mode} has {len(d)} levels; the fit needs at "
+                         "least 3 below the 3 held out")
+    est = estimate(data, fit_levels=[int(v) for v in d.level[:-3]], method="exact",
+                   mode=mode, model=build_case(args.case), case_name=args.case)
+    return predict_from_backbone(data, est, args.case)
+
+
 def run(args) -> int:
     if args.out:
         validate.output_dir(args.out, "--out")   # cli.validate: one output-path rule
@@ -194,12 +217,17 @@ def run(args) -> int:
     if args.case == "double-beam":  # the FE model refitted, base vs extended (issue 13)
         from cases.double_beam.fe_diagnosis_report import add_fe_diagnosis
         add_fe_diagnosis(result, data, out=args.out)
+    if args.backbone:
+        result["backbone"] = _backbone_prediction(args, data, result["mode"])
     if args.out:
         write_report(result, Path(args.out), Path(source).name if args.file else source)
     if args.json:
         print_json(result)
     else:
         print(format_text(result, source))
+        if "backbone" in result:
+            from cli.commands.backbone import format_prediction
+            print(format_prediction(result["backbone"]))
         if args.out:
             print(f"report: {Path(args.out) / 'report.md'}")
     return 0
