@@ -9,24 +9,8 @@ import numpy as np
 
 from cases.double_beam import model as db
 
-#: Round-off of the Hermite beam element grows as (L/h)^4 eps: the relative error of a
-#: low eigenvalue is about eps times the ratio of the mesh's highest eigenvalue (~ EI/(rho
-#: A h^4), the shortest element) to the mode's (~ EI/(rho A L^4)), with L the free length.
-#: Measured on this model (measured mode, against the converged 251.999907 Hz):
-#: 2.3e-6 at h = 0.1 mm, 7.0e-5 at 0.05 mm, 5.6e-4 at 0.025 mm, 5.8e-2 at 0.01 mm
-#: (237.48 Hz instead of 252.00 Hz), i.e. ROUNDOFF_COEFFICIENT (L/h)^4 eps with the
-#: coefficient at most 2.2e-4. Elements smaller than ``min_element_size`` would make that
-#: error exceed ROUNDOFF_TOLERANCE (1e-5 relative, 2.5 mHz at 252 Hz: 5 times below the
-#: smallest level-to-level frequency change of the measured data, 5.7e-5), while the
-#: discretization error is already below 1e-6 from h = 2.5 mm on: they are refused.
-ROUNDOFF_COEFFICIENT = 2.2e-4
-ROUNDOFF_TOLERANCE = 1e-5
-
-
-def min_element_size(free_length: float) -> float:
-    """Smallest useful element size (m): ``L (c eps / tol)^(1/4)`` (comment above)."""
-    eps = np.finfo(float).eps
-    return float(free_length * (ROUNDOFF_COEFFICIENT * eps / ROUNDOFF_TOLERANCE) ** 0.25)
+from cases.mode_report import (ROUNDOFF_COEFFICIENT, ROUNDOFF_TOLERANCE,  # noqa: F401
+                                min_element_size)
 
 
 def max_band_hz(config) -> float:
