@@ -19,11 +19,10 @@ def register(subparsers) -> None:
                      "elements with their stiffness shares and the kind of every parameter "
                      "(given, calibrated, fitted, default with its source). A bad file is "
                      "one line naming table and key, exit status 2."))
-    sub = p.add_subparsers(dest="case_command", metavar="ACTION", required=True)
-    check = sub.add_parser("check", help="check a case file and print its model summary")
-    check.add_argument("case", metavar="FILE|NAME", help="case file (.toml) or shipped name")
-    check.add_argument("--json", action="store_true", help="print the summary as JSON")
-    check.set_defaults(func=run)
+    p.add_argument("action", choices=("check",), help="what to do with the case file")
+    p.add_argument("case", metavar="FILE|NAME", help="case file (.toml) or shipped name")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=run)
 
 
 def run(args) -> int:
