@@ -40,14 +40,14 @@ rho = 7850.0
 [[beam]]
 name = "lower"
 material = "steel"
-x = [0.0, 0.6]
+x = [0.0, 0.597]
 width = 0.03
 thickness = 0.006
 z = 0.0
 [[beam]]
 name = "upper"
 material = "steel"
-x = [0.4, 1.0]
+x = [0.399, 0.996]
 width = 0.03
 thickness = 0.006
 z = 0.006
@@ -57,7 +57,7 @@ kind = "clamp"
 x = [0.0, 0.0]
 [[interface]]
 beams = ["lower", "upper"]
-x = [0.4, 0.6]
+x = [0.399, 0.597]
 normal = "tied"
 tangential = "joint"
 joints_at = [{joints}]
@@ -71,7 +71,7 @@ beam = "lower"
 x = 0.099
 [[sensor]]
 beam = "upper"
-x = 1.0
+x = 0.996
 label = "tip"
 [damping]
 zeta = 0.001
