@@ -108,7 +108,3 @@ def fe_check(name: str, measured_omega2: float) -> dict:
 
     return double_beam_fe_check(measured_omega2=measured_omega2)
 
-
-def nonlinear_case(name: str, **options):
-    """The jointed model of case ``name`` (a shipped name or a case file)."""
-    return resolve_case(name).nonlinear_model(mode=options.get("mode"))

@@ -131,7 +131,7 @@ class _Nodes:
         return int(self.maps[beam].dof(self.node(beam, x), component))
 
 
-def _interface_springs(cf, itf, nodes: _Nodes, lever_lo, lever_up):
+def _interface_springs(cf, itf, nodes: _Nodes):
     """Node pairs of an interface and the through-thickness stiffness per node (N/m)."""
     lo_b, up_b = (cf.beam(n) for n in itf.beams)
     n_lo = nodes.nodes_in(lo_b.name, *itf.x)
@@ -180,7 +180,7 @@ def build_model(cf) -> BuiltCase:
         z_i = z_lo + 0.5 * h_lo
         lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
         m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
-        n_lo, n_up, k = _interface_springs(cf, itf, nodes, lever_lo, lever_up)
+        n_lo, n_up, k = _interface_springs(cf, itf, nodes)
         if itf.normal == "tied":
             G = interface_rows(m_up, m_lo, n_up, n_lo, nodes.n)
             normal_rows.append(G)
@@ -217,7 +217,7 @@ def build_model(cf) -> BuiltCase:
             mass_dofs += [nodes.dof(p.beam, p.x, W), nodes.dof(p.beam, p.x, U)]
             masses += [p.mass, p.mass]
     drive = cf.drive or (cf.sensors[0] if cf.sensors else None)
-    drive_dof = nodes.dof(drive.beam, drive.x, W) if drive else _first_free_w(nodes, is_free)
+    drive_dof = nodes.dof(drive.beam, drive.x, W) if drive else _last_free_w(is_free)
     response = cf.sensors[0] if cf.sensors else drive
     response_dof = nodes.dof(response.beam, response.x, W) if response else drive_dof
     model = assemble_stack(
@@ -229,6 +229,6 @@ def build_model(cf) -> BuiltCase:
     return BuiltCase(model=model, joint_table=table, n_nodes=int(sum(s.n_nodes for s in strips)))
 
 
-def _first_free_w(nodes: _Nodes, is_free: np.ndarray) -> int:
-    w = np.flatnonzero(is_free[W::3]) * 3 + W
-    return int(w[-1])
+def _last_free_w(is_free: np.ndarray) -> int:
+    """A transverse DOF off the supports (a model without drive or sensor needs one)."""
+    return int(np.flatnonzero(is_free[W::3])[-1] * 3 + W)
