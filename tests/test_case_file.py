@@ -148,3 +148,28 @@ def test_capability_missing_is_one_line():
         resolve_case("lumped").fe_model()
     with pytest.raises(InputError, match="unknown case 'nope'"):
         resolve_case("nope")
+
+
+def test_convergence_against_the_finest_mesh_falls_with_refinement():
+    from cases.case_convergence import case_convergence
+
+    r = case_convergence(resolve_case("docs/case-files/bolted-lap-cantilever.toml"), levels=4)
+    change = np.array(r["relative_change_vs_finest"])[:-1, :3]
+    assert np.all(np.diff(change, axis=0) < 0)
+    # nodal contact springs integrate the interface by the trapezoidal rule: O(h^2)
+    assert np.all((np.array(r["rate"][:3]) > 1.8) & (np.array(r["rate"][:3]) < 2.3))
+    assert r["element_size_m"] == [0.005, 0.0025, 0.00125, 0.000625]
+
+
+def test_case_check_and_modes_on_the_command_line(capsys):
+    import json
+
+    from cli.main import main
+
+    assert main(["case", "check", "docs/case-files/bolted-lap-cantilever.toml", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    kinds = {p["parameter"]: p["kind"] for p in s["parameters"]}
+    assert kinds["interface.0.kt"] == "given" and kinds["sensor.0.mass"] == "default"
+    assert main(["modes", "--case", "brb", "--band", "0", "400", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["bending_order"] for r in rows if r["frequency_hz"] > 1] == [1, 2]
