@@ -173,3 +173,27 @@ def test_case_check_and_modes_on_the_command_line(capsys):
     assert main(["modes", "--case", "brb", "--band", "0", "400", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [r["bending_order"] for r in rows if r["frequency_hz"] > 1] == [1, 2]
+
+
+def _with_calibration(tmp_path, text: str):
+    p = tmp_path / "cal.toml"
+    p.write_text(open("docs/case-files/bolted-lap-cantilever.toml").read() + text)
+    return read_case_file(p)
+
+
+def test_calibration_reaches_its_target_and_says_when_it_cannot(tmp_path):
+    cf = _with_calibration(tmp_path, '\n[calibrate]\nparameters = ["mass.0.mass"]\n'
+                                     'frequencies_hz = [13.5]\n')
+    assert cf.kinds["mass.0.mass"][0] == "calibrated"
+    out, report = calibrate(cf)
+    assert report["converged"] and report["targets"][0]["bending_mode"] == 1
+    m = out.masses[0].mass
+    assert m > 0.015                                  # heavier exciter, lower frequency
+    model = build_model(out).model                    # a second build at that mass
+    assert model.bending_mode_frequency(1) == pytest.approx(13.5, rel=1e-6)
+    cf = _with_calibration(tmp_path, '\n[calibrate]\nparameters = ["mass.0.mass"]\n'
+                                     'frequencies_hz = [40.0]\n')
+    _, report = calibrate(cf)         # no exciter mass >= 0 lifts mode 1 from 13.9 to 40 Hz
+    assert not report["converged"]
+    assert abs(report["targets"][0]["calibrated_hz"] / 40.0 - 1) == pytest.approx(
+        report["max_relative_error"]) and report["max_relative_error"] > 0.1

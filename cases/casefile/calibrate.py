@@ -20,6 +20,7 @@ from cases.casefile.parameters import bounds, get_parameter, set_parameter
 
 #: relative frequency error a calibration must reach (else it is reported as failed)
 CALIBRATION_TOLERANCE = 1e-6
+MAX_DOUBLINGS = 36
 
 
 def _bending_frequencies(cf, n: int) -> np.ndarray:
@@ -113,13 +114,14 @@ def _calibrate_cached(cf):
 
 
 def _root_1d(r, x0: float, lo: float, hi: float, scale: float):
-    """Root of ``r`` in [lo, hi]: steps doubling from ``x0`` in both directions until the
-    sign changes, then Brent's method; the best point seen if there is no sign change."""
+    """Root of ``r`` in [lo, hi]: steps doubling from ``x0`` in both directions (at most
+    :data:`MAX_DOUBLINGS`, i.e. 2^30 times the scale) until the sign changes, then Brent's
+    method; the best point seen if there is no sign change (the report says not converged)."""
     r0 = r(x0)
     best = (abs(r0), x0, r0)
     for direction in (1.0, -1.0):
         a, ra, step = x0, r0, scale / 64
-        while True:
+        for _ in range(MAX_DOUBLINGS):
             b = min(max(a + direction * step, lo), hi)
             if b == a:
                 break

@@ -53,9 +53,14 @@ def run(args) -> int:
     if not report["modes"]:
         print("  (no modes in the band)")
     cal = report["calibration"]
-    for p, t in zip(cal["parameters"], cal["targets"]) if cal else ():
-        print(f"calibrated {p['parameter']}: {p['initial']:.6g} -> {p['calibrated']:.7g} so that "
-              f"bending mode {t['bending_mode']} is at {t['frequency_hz']:g} Hz (measured); "
-              f"at the file's value {t['initial_hz']:.2f} Hz "
+    for p in cal["parameters"] if cal else ():
+        print(f"calibrated {p['parameter']}: {p['initial']:.6g} -> {p['calibrated']:.7g}"
+              + (" (at a bound)" if p["at_bound"] else ""))
+    for t in cal["targets"] if cal else ():
+        print(f"  bending mode {t['bending_mode']}: {t['calibrated_hz']:.2f} Hz, measured "
+              f"{t['frequency_hz']:g} Hz; at the file's values {t['initial_hz']:.2f} Hz "
               f"({100 * (t['initial_hz'] / t['frequency_hz'] - 1):+.1f} %)")
+    if cal and not cal["converged"]:
+        print(f"CALIBRATION FAILED: relative frequency error {cal['max_relative_error']:.2e} "
+              "remains (the targets are out of the parameters' reach)")
     return 0
