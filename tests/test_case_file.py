@@ -170,7 +170,7 @@ def test_case_check_and_modes_on_the_command_line(capsys):
     s = json.loads(capsys.readouterr().out)
     kinds = {p["parameter"]: p["kind"] for p in s["parameters"]}
     assert kinds["interface.0.kt"] == "given" and kinds["sensor.0.mass"] == "default"
-    assert main(["modes", "--case", "brb", "--band", "0", "400", "--json"]) == 0
+    assert main(["modes", "--case", "brb", "--band", "0", "500", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [r["bending_order"] for r in rows if r["frequency_hz"] > 1] == [1, 2]
 
