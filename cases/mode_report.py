@@ -75,7 +75,7 @@ def mode_report(case, band=(0.0, 1000.0), element_size=None, uncalibrated=False)
         raise ValueError(f"--band {lo:g} {hi:g}: HI must be <= {top:.4g} Hz, the shortest "
                          f"bending wave this beam model and mesh represent")
     file_at = case.builders["calibrated_file"]
-    f_cal, calibration = file_at(element_size=element_size)
+    calibration = file_at(element_size=element_size)[1]
     model = case.fe_model(element_size=element_size, calibrated=not uncalibrated)
     measured = cf.measured.frequency_hz if cf.measured is not None else None
     return {"case": case.name, "band_hz": [lo, hi], "measured_frequency_hz": measured,

@@ -12,7 +12,7 @@ two stacked beams share their nodes over an interface. Each beam's reference lin
   through the interface, ``l`` the node's tributary length in the interface, ``b`` the
   narrower width): stiff, bilateral contact;
 * ``tangential = "tied"``: bonded, one plane section: :data:`TIED_PENALTY` times that
-  stiffness on the slip and (times ``(lever_bot + lever_top + h_bot/2)^2``) on
+  stiffness on the slip and (times ``((h_bot + h_top)/2)^2``) on
   ``theta_top - theta_bot`` (without the rotation tie a section change at a lap end acts
   as a hinge for the half that continues: 5 % low on a tied lap);
   ``"free"``: nothing (frictionless); ``"joint"``: joint elements on the slip
@@ -177,6 +177,7 @@ def build_model(cf) -> BuiltCase:
         lo_b, up_b = (cf.beam(n) for n in itf.beams)
         xm = 0.5 * (itf.x[0] + itf.x[1])
         h_lo, z_lo, _ = lo_b.section_at(xm)
+        h_up = up_b.section_at(xm)[0]
         z_i = z_lo + 0.5 * h_lo
         lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
         m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
@@ -190,7 +191,7 @@ def build_model(cf) -> BuiltCase:
                               TIED_PENALTY * k))
             rot = coupling_rows(np.column_stack([m_up.dof(n_up, THETA), m_lo.dof(n_lo, THETA)]),
                                 [1.0, -1.0], nodes.n)    # one plane section: theta_top = theta_bot
-            couplings.append((rot, TIED_PENALTY * k * (lever_lo + lever_up + 0.5 * h_lo) ** 2))
+            couplings.append((rot, TIED_PENALTY * k * (0.5 * (h_lo + h_up)) ** 2))
         if itf.tangential == "joint":
             xj = joint_positions(itf)
             kj = itf.kt * joint_shares(itf)
