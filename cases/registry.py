@@ -1,35 +1,84 @@
-"""The shipped cases by name: the one registry every ``--case`` option resolves through.
+"""The shipped cases, and ``--case NAME|FILE``: every ``--case`` resolves here.
 
-``CASES`` names the FE models of the shipped cases. :func:`build_case` builds one (the
-estimator takes it as a duck-typed model, see :mod:`inverse.fe_reference`),
-:func:`case_modes` gives its lowest modes (render, export), :func:`mode_table` the
-``iwanfe modes`` report, :data:`MEASURED_DATA` the measured data shipped with a case,
-and :func:`fe_check` the FE-level check of a diagnosis on the case's model. The case
-modules are imported only when a case is built (the command line starts quickly).
+:func:`resolve_case` gives a :class:`cases.case.Case` for a shipped name
+(:data:`SHIPPED`: each a case file, or a Python case such as the lumped 10-DOF model) or
+for a path to a ``.toml`` case file. The older helpers below serve the commands that stay
+with the double beam this session (``estimate --case``, ``diagnose --case``):
+:func:`build_case` builds the double beam's Python model (equal to its case file's to
+~2e-8 in frequency, the calibrated clamp grip's last digits), :data:`MEASURED_DATA`,
+:func:`fe_check`. The case modules are imported only when a case is built.
 """
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 
 from cases.paper_data import DATA_FILE
 from ident.errors import InputError
 
+_HERE = Path(__file__).resolve().parent
+#: shipped case files by name
+CASE_FILES = {"double-beam": _HERE / "double_beam" / "double-beam.toml",
+              "brb": _HERE / "brb" / "brb.toml"}
+#: every shipped name: the case files and the Python cases
+SHIPPED = (*CASE_FILES, "lumped")
+
+#: the case a command studies when ``--case`` is not given
+DEFAULT_CASE = "double-beam"
 CASES = ("double-beam",)
-#: Cases with a nonlinear (jointed) model: ``iwanfe backbone --case``
-#: (:func:`nonlinear_case`).
-NONLINEAR_CASES = ("double-beam", "lumped")
 #: Measured-data CSV shipped with each case (``iwanfe diagnose --case NAME``).
 MEASURED_DATA = {"double-beam": DATA_FILE}
 
 
+def resolve_case(name_or_file: str):
+    """The :class:`cases.case.Case` of a shipped name or of a case file path."""
+    key = str(name_or_file)
+    if key in CASE_FILES:
+        from cases.casefile.case import case_from_file
+
+        case = case_from_file(CASE_FILES[key])
+        if key == "double-beam":   # its joints: chi, R~ estimated from its measured levels
+            from cases.nonlinear_case import build_nonlinear_case
+
+            case.builders["nonlinear_model"] = lambda mode=None: build_nonlinear_case(
+                "double-beam", mode=mode)
+        return case
+    if key == "lumped":
+        return _lumped_case()
+    if key.endswith(".toml") or Path(key).is_file():
+        from cases.casefile.case import case_from_file
+
+        return case_from_file(key)
+    raise InputError(f"unknown case {key!r}: give a shipped name ({', '.join(SHIPPED)}) "
+                     f"or a case file (.toml)")
+
+
+def _lumped_case():
+    from cases.case import Case
+    from cases.nonlinear_case import lumped_case
+
+    def nonlinear(mode=None):
+        case = lumped_case() if mode is None else lumped_case(mode=int(mode))
+        if mode is not None:
+            if not 1 <= int(mode) <= case.model.n_reduced:
+                raise ValueError(f"mode must be in 1..{case.model.n_reduced}, got {mode}")
+            case.mode = int(mode)
+        return case
+
+    return Case(name="lumped", description="the paper's lumped 10-DOF model (eq. 38-40) "
+                "with two Iwan joints", source="cases.lumped10",
+                builders={"nonlinear_model": nonlinear})
+
+
 def _check_known(name: str) -> None:
-    """InputError (one line) unless ``name`` is a shipped case."""
+    """InputError (one line) unless ``name`` is a case of the older helpers."""
     if name not in CASES:
         raise InputError(f"unknown case {name!r}; known: {', '.join(CASES)}")
 
 
 def build_case(name: str):
-    """The FE model of the shipped case ``name`` (its default configuration)."""
+    """The FE model of a case of :data:`CASES` (the double beam's Python model)."""
     _check_known(name)
     from cases.double_beam.model import DoubleBeamConfig, build_double_beam
 
@@ -51,16 +100,6 @@ def case_modes(model, n_modes: int):
     return omega[:n_modes] / (2 * np.pi), shapes[:, :n_modes]
 
 
-def mode_table(name: str, **options) -> dict:
-    """The ``iwanfe modes`` report of case ``name``: modes in a band with kind and glue
-    slip, and the calibration statement (``options``: see
-    :func:`cases.double_beam.mode_table.double_beam_report`)."""
-    _check_known(name)
-    from cases.double_beam.mode_table import double_beam_report
-
-    return double_beam_report(**options)
-
-
 def fe_check(name: str, measured_omega2: float) -> dict:
     """FE-level check of a diagnosis on the model of case ``name``
     (:func:`cases.double_beam.fe_check.double_beam_fe_check`)."""
@@ -69,12 +108,3 @@ def fe_check(name: str, measured_omega2: float) -> dict:
 
     return double_beam_fe_check(measured_omega2=measured_omega2)
 
-
-def nonlinear_case(name: str, **options):
-    """The jointed model of case ``name`` in :data:`NONLINEAR_CASES`
-    (:func:`cases.nonlinear_case.build_nonlinear_case`)."""
-    if name not in NONLINEAR_CASES:
-        raise InputError(f"unknown case {name!r}; known: {', '.join(NONLINEAR_CASES)}")
-    from cases.nonlinear_case import build_nonlinear_case
-
-    return build_nonlinear_case(name, **options)

@@ -41,6 +41,7 @@ from runs import interrupt  # noqa: E402  (numpy-free: installs the Ctrl-C handl
 # Sub-command modules in the order --help lists them.
 COMMANDS = [
     "joint",
+    "case",
     "modes",
     "convergence",
     "render",

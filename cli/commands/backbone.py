@@ -20,7 +20,7 @@ import numpy as np
 
 from cli import validate
 
-from cases.registry import NONLINEAR_CASES, nonlinear_case
+from cases.registry import SHIPPED, resolve_case
 from runs.jsonio import print_json
 
 NAME = "backbone"
@@ -42,10 +42,11 @@ def register(subparsers) -> None:
             "response-controlled vs force-controlled virtual tests, each fed to the "
             "estimator against the true joint."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--case", choices=NONLINEAR_CASES, required=True)
+    parser.add_argument("--case", required=True, metavar="NAME|FILE",
+                        help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml) with "
+                             "every joint parameter given")
     parser.add_argument("--mode", type=int, default=None,
-                        help="1-based stuck-joint mode (default: the case's studied mode, "
-                             "4 for double-beam, 2 for lumped)")
+                        help="1-based stuck-joint mode (default: the case's studied mode)")
     parser.add_argument("--path", choices=("exact", "bank"), default="exact",
                         help="joint path of the harmonic balance")
     parser.add_argument("--range", type=float, nargs=2, default=(1e-3, 3.0),
@@ -71,7 +72,7 @@ def run(args) -> int:
         validate.output_file(args.plot, "--plot", (".png",))   # cli.validate: one rule
     if args.mode is not None and args.mode < 1:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
-    case = nonlinear_case(args.case, mode=args.mode)
+    case = resolve_case(args.case).nonlinear_model(mode=args.mode)
     if args.compare:
         return _compare(case, args)
     from fe.epmc import epmc_backbone

@@ -6,7 +6,7 @@ Example::
 """
 from __future__ import annotations
 
-from cases.registry import CASES, build_case, case_modes
+from cases.registry import DEFAULT_CASE, SHIPPED, case_modes, resolve_case
 from cli import validate
 from runs.jsonio import print_json
 
@@ -27,7 +27,9 @@ def register(subparsers) -> None:
             "suffix of --out (.xdmf comes with its .h5)."
         ),
     )
-    p.add_argument("--case", choices=CASES, default="double-beam", help="study")
+    p.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
+                   help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml); "
+                        f"default {DEFAULT_CASE}")
     p.add_argument("--out", required=True, metavar="FILE.vtu|FILE.xdmf",
                    help="file to write (its folder must exist)")
     p.add_argument("--modes", type=int, default=6, metavar="N",
@@ -45,13 +47,14 @@ def run(args) -> int:
     out = validate.output_file(args.out, "--out", EXPORT_SUFFIXES)
     if not 1 <= args.modes <= MAX_MODES:
         raise ValueError(f"--modes {args.modes}: must be in 1..{MAX_MODES}")
-    model = build_case(args.case)
+    case = resolve_case(args.case)
+    model = case.fe_model()
     freqs, shapes = case_modes(model, args.modes)
     modes = [model.strip_displacements(shapes[:, k]) for k in range(shapes.shape[1])]
     written = write_modes(out, model.strips, modes, freqs, geometry=args.geometry)
     n_points = sum(len(s.x) for s in model.strips)
     if args.json:
-        print_json({"case": args.case, "files": [str(p) for p in written],
+        print_json({"case": case.name, "files": [str(p) for p in written],
                     "geometry": args.geometry, "n_strips": len(model.strips),
                     "n_nodes": n_points,
                     "modes": [{"mode": k + 1, "frequency_hz": float(f),

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from cases.registry import CASES, build_case, case_modes
+from cases.registry import DEFAULT_CASE, SHIPPED, case_modes, resolve_case
 from cli import validate
 from cli.commands.export import MAX_MODES
 from runs.jsonio import print_json
@@ -26,7 +26,9 @@ def register(subparsers) -> None:
             "same factor so the slip stays consistent with the drawn thickness."
         ),
     )
-    p.add_argument("--case", choices=CASES, default="double-beam", help="study")
+    p.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
+                   help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml); "
+                        f"default {DEFAULT_CASE}")
     p.add_argument("--mode", type=int, required=True, metavar="N",
                    help=f"mode number, 1 = lowest frequency (1..{MAX_MODES})")
     p.add_argument("--out", required=True, metavar="FILE.png",
@@ -64,7 +66,8 @@ def run(args) -> int:
     _check_args(args)
     from viz.render import render_mode_shape
 
-    model = build_case(args.case)
+    case = resolve_case(args.case)
+    model = case.fe_model()
     freqs, shapes = case_modes(model, args.mode)
     shape = shapes[:, args.mode - 1]
     kind = model.classify_mode(shape)
@@ -75,7 +78,7 @@ def run(args) -> int:
         scalar_label="displacement magnitude (mass-normalized, m/sqrt(kg))",
     )
     if args.json:
-        print_json({"case": args.case, "file": str(result.path), "mode": args.mode,
+        print_json({"case": case.name, "file": str(result.path), "mode": args.mode,
                     "frequency_hz": float(freqs[-1]), "kind": kind, "scale": result.scale,
                     "thickness_scale": result.thickness_scale, "seconds": result.seconds})
         return 0

@@ -1,0 +1,59 @@
+"""One face per case: its model, measured data, nonlinear model and what it can do.
+
+A command asks a :class:`Case` for a capability (:meth:`Case.require`); a case that lacks
+it is a one-line :class:`ident.errors.InputError` naming the case and what it offers.
+Cases come from :mod:`cases.registry` (a shipped name or a case file).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+from ident.errors import InputError
+
+#: capability -> what it means (the wording of the error when a case lacks it)
+CAPABILITIES = {
+    "fe_model": "FE strip model (modes, convergence, render, export)",
+    "summary": "model summary (case check)",
+    "measured_data": "measured data",
+    "nonlinear_model": "nonlinear model with every joint parameter given (backbone)",
+}
+
+
+@dataclass
+class Case:
+    """A case: ``name`` (used in outputs), ``source`` (its file or module), and one
+    builder per capability (:data:`CAPABILITIES`)."""
+
+    name: str
+    description: str
+    source: str
+    builders: dict = field(default_factory=dict)
+    file: object = None          # the checked case file, when the case is one
+
+    @property
+    def capabilities(self) -> tuple:
+        return tuple(c for c in CAPABILITIES if c in self.builders)
+
+    def require(self, capability: str) -> Callable:
+        """The builder of ``capability``, or InputError (one line)."""
+        if capability not in self.builders:
+            offers = ", ".join(self.capabilities) or "nothing"
+            raise InputError(f"case {self.name!r} has no {CAPABILITIES[capability]} "
+                             f"(it offers: {offers})")
+        return self.builders[capability]
+
+    def fe_model(self, **options):
+        """The linear FE model (``options``: e.g. ``element_size``, ``calibrated``)."""
+        return self.require("fe_model")(**options)
+
+    def measured_data(self):
+        """Path of the measured-data table."""
+        return self.require("measured_data")()
+
+    def nonlinear_model(self, mode: int | None = None):
+        """The jointed model (:class:`cases.nonlinear_case.NonlinearCase`)."""
+        return self.require("nonlinear_model")(mode=mode)
+
+    def summary(self) -> dict:
+        return self.require("summary")()

@@ -1,0 +1,235 @@
+"""The FE model of a case file: strips, supports, interfaces with their joint rows, masses.
+
+Nodes sit at every x the file names (beam and section ends, supports, interfaces, joints,
+masses, drive, sensors), elements in between no longer than ``[mesh] element_size``
+(:func:`fe.mesh.mesh_with_element_size`); every beam takes the nodes of its own range, so
+two stacked beams share their nodes over an interface. Each beam's reference line is its
+``z``; a section with another centroid height is an eccentric element
+(:mod:`fe.stacked`). At an interface at height ``z_i`` (the lower beam's top face):
+
+* ``normal = "tied"``: at every node a spring on ``w_top - w_bot`` of stiffness
+  ``b l / (h_bot/(2 E_bot) + h_top/(2 E_top))`` (the two half-thicknesses in series
+  through the interface, ``l`` the node's tributary length in the interface, ``b`` the
+  narrower width): stiff, bilateral contact;
+* ``tangential = "tied"``: bonded, one plane section: :data:`TIED_PENALTY` times that
+  stiffness on the slip and (times ``((h_bot + h_top)/2)^2``) on
+  ``theta_top - theta_bot`` (without the rotation tie a section change at a lap end acts
+  as a hinge for the half that continues: 5 % low on a tied lap);
+  ``"free"``: nothing (frictionless); ``"joint"``: joint elements on the slip
+  ``s = (u_top + lever_top theta_top) - (u_bot - lever_bot theta_bot)`` at ``joints_at``
+  (equal shares of ``kt``) or at ``joint_elements`` evenly spaced positions (trapezoidal
+  shares ``k_j = kt w_j / sum w``, ``w`` the trapezoidal weights of the positions), so
+  ``sum k_j = kt``.
+
+Supports: ``clamp`` fixes every DOF of the nodes in ``[x0, x1]``, ``pin`` fixes ``u, w``,
+``spring`` adds grounded springs ``k_u, k_w, k_theta``. Point masses (and sensor masses)
+act on ``u`` and ``w``. SI units.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from fe.assembly import coupling_rows
+from fe.beam import THETA, U, W
+from fe.mesh import DofMap, line_mesh, segmented_line_mesh
+from fe.stacked import StackedModel, StripMesh, assemble_stack, interface_rows
+
+NODE_TOLERANCE = 1e-9  # m: x values closer than this are one node
+#: a tied tangential contact: this many times the through-thickness stiffness (a penalty
+#: for "no slip"; 1e3 keeps K well conditioned, the tied lap then equals the monolithic
+#: beam to the mesh error, tests/test_case_file.py)
+TIED_PENALTY = 1.0e3
+
+
+@dataclass
+class BuiltCase:
+    """A case file's model and what the summary reports about it."""
+    model: StackedModel
+    joint_table: list        # dicts: interface, x_m, share, k_N_per_m
+    n_nodes: int
+
+
+def joint_positions(itf) -> np.ndarray:
+    """Joint element positions of an interface (m)."""
+    if itf.joints_at is not None:
+        return np.asarray(itf.joints_at, dtype=float)
+    return np.linspace(itf.x[0], itf.x[1], int(itf.joint_elements))
+
+
+def joint_shares(itf) -> np.ndarray:
+    """Each joint element's share of ``kt`` (sums to 1): equal at bolts, trapezoidal for
+    distributed elements (module docstring)."""
+    x = joint_positions(itf)
+    if itf.joints_at is not None:
+        return np.full(x.size, 1.0 / x.size)
+    w = line_mesh(x).tributary_length()
+    return w / w.sum()
+
+
+def _named_x(cf) -> np.ndarray:
+    xs = []
+    for b in cf.beams:
+        xs += list(b.x) + [v for s in b.sections for v in s.x]
+    xs += [v for s in cf.supports for v in s.x]
+    for itf in cf.interfaces:
+        xs += list(itf.x)
+        if itf.tangential == "joint":
+            xs += list(joint_positions(itf))
+    xs += [p.x for p in (*cf.masses, *cf.sensors)] + ([cf.drive.x] if cf.drive else [])
+    x = np.unique(np.asarray(xs, dtype=float))
+    keep = np.concatenate([[True], np.diff(x) > NODE_TOLERANCE])
+    return x[keep]
+
+
+def node_positions(cf, element_size: float | None = None) -> np.ndarray:
+    """All node positions (m): the named x, elements between them no longer than the
+    element size (to 1e-6 relative, so a calibrated length rounded in its last digits does
+    not add an element)."""
+    b = _named_x(cf)
+    h = cf.element_size if element_size is None else element_size
+    counts = np.maximum(1, np.ceil(np.diff(b) / h - 1e-6).astype(int))
+    return segmented_line_mesh(b, counts).x
+
+
+def _strip(cf, beam, x_all: np.ndarray) -> StripMesh:
+    x = x_all[(x_all >= beam.x[0] - NODE_TOLERANCE) & (x_all <= beam.x[1] + NODE_TOLERANCE)]
+    mid = 0.5 * (x[1:] + x[:-1])
+    props = np.array([beam.section_at(m) for m in mid])         # thickness, z, width
+    h, zc, b = props[:, 0], props[:, 1], props[:, 2]
+    mat = cf.material(beam.material)
+    area = b * h
+    return StripMesh(beam.name, x, float(beam.z), EA=mat.E * area, EI=mat.E * (b * h**3 / 12.0),
+                     rhoA=mat.rho * area, offset=zc - beam.z, thickness=h, width=b)
+
+
+class _Nodes:
+    """Node and DOF lookup of the strips."""
+
+    def __init__(self, strips):
+        self.strips = {s.name: s for s in strips}
+        self.maps, offset = {}, 0
+        for s in strips:
+            self.maps[s.name] = DofMap(s.n_nodes, 3, offset)
+            offset = self.maps[s.name].stop
+        self.n = offset
+
+    def node(self, beam: str, x: float) -> int:
+        xs = self.strips[beam].x
+        i = int(np.argmin(np.abs(xs - x)))
+        if abs(xs[i] - x) > NODE_TOLERANCE:
+            raise ValueError(f"no node of beam {beam!r} at x = {x:g} m")
+        return i
+
+    def nodes_in(self, beam: str, x0: float, x1: float) -> np.ndarray:
+        xs = self.strips[beam].x
+        return np.flatnonzero((xs >= x0 - NODE_TOLERANCE) & (xs <= x1 + NODE_TOLERANCE))
+
+    def dof(self, beam: str, x: float, component: int) -> int:
+        return int(self.maps[beam].dof(self.node(beam, x), component))
+
+
+def _interface_springs(cf, itf, nodes: _Nodes):
+    """Node pairs of an interface and the through-thickness stiffness per node (N/m)."""
+    lo_b, up_b = (cf.beam(n) for n in itf.beams)
+    n_lo = nodes.nodes_in(lo_b.name, *itf.x)
+    n_up = nodes.nodes_in(up_b.name, *itf.x)
+    x = nodes.strips[lo_b.name].x[n_lo]
+    trib = line_mesh(x).tributary_length()
+    centre = 0.5 * (itf.x[0] + itf.x[1])
+    inward = x + np.sign(centre - x) * 1e-7
+    E_lo, E_up = cf.material(lo_b.material).E, cf.material(up_b.material).E
+    k = np.empty(x.size)
+    for i, xi in enumerate(inward):
+        h_lo, _, b_lo = lo_b.section_at(xi)
+        h_up, _, b_up = up_b.section_at(xi)
+        k[i] = min(b_lo, b_up) * trib[i] / (0.5 * h_lo / E_lo + 0.5 * h_up / E_up)
+    return n_lo, n_up, k
+
+
+def build_model(cf) -> BuiltCase:
+    """Assemble the case file's linear model (module docstring)."""
+    x_all = node_positions(cf)
+    strips = [_strip(cf, b, x_all) for b in cf.beams]
+    nodes = _Nodes(strips)
+    fixed, couplings = [], []
+    for s in cf.supports:
+        for beam in s.beams:
+            dm = nodes.maps[beam]
+            if s.kind == "clamp":
+                fixed += list(dm.node_dofs(nodes.nodes_in(beam, *s.x)).ravel())
+            elif s.kind == "pin":
+                n0 = nodes.node(beam, s.x[0])
+                fixed += [int(dm.dof(n0, U)), int(dm.dof(n0, W))]
+            elif s.kind == "spring":
+                for comp, k in ((U, s.k_u), (W, s.k_w), (THETA, s.k_theta)):
+                    if k > 0:
+                        dof = nodes.dof(beam, s.x[0], comp)
+                        couplings.append((coupling_rows([[dof]], [1.0], nodes.n), np.array([k])))
+    fixed = np.unique(np.asarray(fixed, dtype=int))
+    is_free = np.ones(nodes.n, dtype=bool)
+    is_free[fixed] = False
+
+    normal_rows, normal_k, joint_rows, joint_k, joint_x, joint_itf, table = [], [], [], [], [], [], []
+    for i, itf in enumerate(cf.interfaces):
+        lo_b, up_b = (cf.beam(n) for n in itf.beams)
+        xm = 0.5 * (itf.x[0] + itf.x[1])
+        h_lo, z_lo, _ = lo_b.section_at(xm)
+        h_up = up_b.section_at(xm)[0]
+        z_i = z_lo + 0.5 * h_lo
+        lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
+        m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
+        n_lo, n_up, k = _interface_springs(cf, itf, nodes)
+        if itf.normal == "tied":
+            G = interface_rows(m_up, m_lo, n_up, n_lo, nodes.n)
+            normal_rows.append(G)
+            normal_k.append(k)
+        if itf.tangential == "tied":
+            couplings.append((interface_rows(m_up, m_lo, n_up, n_lo, nodes.n, lever_up, lever_lo),
+                              TIED_PENALTY * k))
+            rot = coupling_rows(np.column_stack([m_up.dof(n_up, THETA), m_lo.dof(n_lo, THETA)]),
+                                [1.0, -1.0], nodes.n)    # one plane section: theta_top = theta_bot
+            couplings.append((rot, TIED_PENALTY * k * (0.5 * (h_lo + h_up)) ** 2))
+        if itf.tangential == "joint":
+            xj = joint_positions(itf)
+            kj = itf.kt * joint_shares(itf)
+            jn_lo = [nodes.node(lo_b.name, v) for v in xj]
+            jn_up = [nodes.node(up_b.name, v) for v in xj]
+            joint_rows.append(interface_rows(m_up, m_lo, jn_up, jn_lo, nodes.n, lever_up, lever_lo))
+            joint_k.append(kj)
+            joint_x.append(xj)
+            joint_itf.append(np.full(xj.size, i))
+            table += [{"interface": i, "x_m": float(a), "share": float(c / itf.kt),
+                       "k_N_per_m": float(c)} for a, c in zip(xj, kj)]
+    normal = None
+    if normal_rows:
+        G_n = sp.vstack(normal_rows, format="csr")
+        k_n = np.concatenate(normal_k)
+        touches_free = np.asarray(abs(G_n) @ is_free.astype(float)).ravel() > 0
+        normal = (G_n[np.flatnonzero(touches_free)], k_n[touches_free])
+        couplings.insert(0, normal)
+    G_t = sp.vstack(joint_rows, format="csr") if joint_rows else None
+
+    mass_dofs, masses = [], []
+    for p in (*cf.masses, *cf.sensors):
+        if p.mass > 0:
+            mass_dofs += [nodes.dof(p.beam, p.x, W), nodes.dof(p.beam, p.x, U)]
+            masses += [p.mass, p.mass]
+    drive = cf.drive or (cf.sensors[0] if cf.sensors else None)
+    drive_dof = nodes.dof(drive.beam, drive.x, W) if drive else _last_free_w(is_free)
+    response = cf.sensors[0] if cf.sensors else drive
+    response_dof = nodes.dof(response.beam, response.x, W) if response else drive_dof
+    model = assemble_stack(
+        strips, couplings, G_t, np.concatenate(joint_k) if joint_k else np.zeros(0),
+        np.concatenate(joint_x) if joint_x else np.zeros(0),
+        np.concatenate(joint_itf) if joint_itf else np.zeros(0, int), mass_dofs, masses,
+        fixed, drive_dof, response_dof, normal=normal,
+        point_mass=sum(p.mass for p in (*cf.masses, *cf.sensors)))
+    return BuiltCase(model=model, joint_table=table, n_nodes=int(sum(s.n_nodes for s in strips)))
+
+
+def _last_free_w(is_free: np.ndarray) -> int:
+    """A transverse DOF off the supports (a model without drive or sensor needs one)."""
+    return int(np.flatnonzero(is_free[W::3])[-1] * 3 + W)

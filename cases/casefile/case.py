@@ -1,0 +1,40 @@
+"""A case file as a :class:`cases.case.Case`: the FE model (calibrated, or at the file's
+values), the measured data it names, its nonlinear model when every joint parameter is
+given, and its summary."""
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from cases.case import Case
+from cases.casefile.build import build_model
+from cases.casefile.calibrate import calibrate
+from cases.casefile.nonlinear import missing_joint_parameters, nonlinear_case
+from cases.casefile.schema import read_case_file
+from cases.casefile.summary import case_summary
+
+
+def case_from_file(path) -> Case:
+    """Read and check the case file at ``path`` (CaseFileError on a fault)."""
+    cf = read_case_file(Path(path))
+
+    def file_at(element_size=None, calibrated=True):
+        f = cf if element_size is None else dataclasses.replace(cf, element_size=float(element_size))
+        return calibrate(f) if calibrated else (f, None)
+
+    def fe_model(element_size=None, calibrated=True):
+        return build_model(file_at(element_size, calibrated)[0]).model
+
+    def summary():
+        f, report = file_at()
+        return case_summary(f, build_model(f), report)
+
+    builders = {"fe_model": fe_model, "summary": summary, "calibrated_file": file_at}
+    if cf.measured is not None and cf.measured.file is not None:
+        builders["measured_data"] = lambda: cf.measured.file
+    joints = any(i.tangential == "joint" for i in cf.interfaces)
+    if joints and cf.drive is not None and not missing_joint_parameters(cf):
+        builders["nonlinear_model"] = lambda mode=None: nonlinear_case(
+            file_at()[0], fe_model(), mode=mode)
+    return Case(name=cf.name, description=cf.description, source=str(cf.path),
+                builders=builders, file=cf)

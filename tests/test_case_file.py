@@ -1,0 +1,199 @@
+"""Case files against independent truth: analytic Euler-Bernoulli frequencies of a single
+strip (cantilever and free-free), a tied lap equal to the monolithic beam, stiffness
+shares summing to kt, the double beam's case file equal to its Python model, calibration
+reaching its target, and the Case face's one-line refusals."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cases.casefile.build import build_model
+from cases.casefile.calibrate import calibrate
+from cases.casefile.schema import read_case_file
+from cases.registry import resolve_case
+from ident.errors import InputError
+
+BETA_L_CANTILEVER = np.array([1.8751040687, 4.6940911330, 7.8547574382])
+BETA_L_FREE = np.array([4.7300407449, 7.8532046241, 10.9956078380])
+E, RHO, B, H, L = 70e9, 2700.0, 0.03, 0.005, 0.4
+
+
+def _single(tmp_path, support: str, element_size=0.005):
+    text = f"""[case]
+name = "strip"
+[[material]]
+name = "al"
+E = {E}
+rho = {RHO}
+[[beam]]
+name = "a"
+material = "al"
+x = [0.0, {L}]
+width = {B}
+thickness = {H}
+{support}
+[mesh]
+element_size = {element_size}
+"""
+    p = tmp_path / "strip.toml"
+    p.write_text(text)
+    return p
+
+
+def _analytic(beta_l):
+    return beta_l**2 / (2 * np.pi * L**2) * np.sqrt(E * H**2 / (12 * RHO))
+
+
+def test_single_strip_cantilever_matches_the_closed_form(tmp_path):
+    p = _single(tmp_path, '[[support]]\nbeam = "a"\nkind = "clamp"\nx = [0.0, 0.0]')
+    model = build_model(read_case_file(p)).model
+    omega, shapes = model.modes(6)
+    order = model.bending_order(omega, shapes)
+    f = np.array([omega[order == k][0] for k in (1, 2, 3)]) / (2 * np.pi)
+    np.testing.assert_allclose(f, _analytic(BETA_L_CANTILEVER), rtol=1e-6)
+
+
+def test_single_strip_free_free_matches_the_closed_form(tmp_path):
+    model = build_model(read_case_file(_single(tmp_path, ""))).model
+    omega, shapes = model.modes(8)
+    assert np.sum(omega < 1e-3 * omega.max()) == 3          # u, w, rotation
+    order = model.bending_order(omega, shapes)
+    f = np.array([omega[order == k][0] for k in (1, 2, 3)]) / (2 * np.pi)
+    np.testing.assert_allclose(f, _analytic(BETA_L_FREE), rtol=1e-6)
+
+
+def test_tied_lap_equals_the_monolithic_beam(tmp_path):
+    """A BRB-style lap (each strip notched to half thickness over the lap), bonded:
+    the free-free frequencies of the uniform strip of the full length."""
+    lap = f"""[case]
+name = "tied-lap"
+[[material]]
+name = "al"
+E = {E}
+rho = {RHO}
+[[beam]]
+name = "left"
+material = "al"
+x = [0.0, 0.24]
+width = {B}
+thickness = {H}
+[[beam.section]]
+x = [0.16, 0.24]
+thickness = {H / 2}
+z = {-H / 4}
+[[beam]]
+name = "right"
+material = "al"
+x = [0.16, {L}]
+width = {B}
+thickness = {H}
+[[beam.section]]
+x = [0.16, 0.24]
+thickness = {H / 2}
+z = {H / 4}
+[[interface]]
+beams = ["left", "right"]
+x = [0.16, 0.24]
+normal = "tied"
+tangential = "tied"
+[mesh]
+element_size = 0.0025
+"""
+    p = tmp_path / "lap.toml"
+    p.write_text(lap)
+    model = build_model(read_case_file(p)).model
+    omega, _ = model.modes(8)
+    f = omega[3:6] / (2 * np.pi)
+    np.testing.assert_allclose(f, _analytic(BETA_L_FREE), rtol=2e-3)
+
+
+def test_stiffness_shares_sum_to_kt_trapezoidal_and_equal():
+    cf = read_case_file("cases/double_beam/double-beam.toml")
+    built = build_model(cf)
+    shares = np.array([j["share"] for j in built.joint_table])
+    np.testing.assert_allclose(shares, [0.125, 0.25, 0.25, 0.25, 0.125], rtol=1e-12)
+    assert built.model.joint_stiffness.sum() == pytest.approx(cf.interfaces[1].kt, rel=1e-14)
+    brb = build_model(read_case_file("cases/brb/brb.toml"))
+    np.testing.assert_allclose([j["share"] for j in brb.joint_table], [1 / 3] * 3, rtol=1e-14)
+    assert brb.model.joint_stiffness.sum() == pytest.approx(3.0e8, rel=1e-14)
+
+
+def test_double_beam_case_file_equals_its_python_model():
+    from cases.double_beam.model import CALIBRATED_CLAMP_LENGTH, build_double_beam
+
+    cf, report = calibrate(read_case_file("cases/double_beam/double-beam.toml"))
+    assert report["converged"]
+    assert report["parameters"][0]["calibrated"] == pytest.approx(CALIBRATED_CLAMP_LENGTH, abs=5e-8)
+    model, ref = build_model(cf).model, build_double_beam()
+    assert model.M.shape == ref.M.shape
+    np.testing.assert_array_equal(model.slip_matrix.toarray(), ref.slip_matrix.toarray())
+    assert (model.drive_dof, model.response_dof) == (ref.drive_dof, ref.response_dof)
+    np.testing.assert_allclose(model.joint_stiffness, ref.joint_stiffness, rtol=1e-14)
+    w, _ = model.modes(10)
+    w_ref, _ = ref.modes(10)
+    np.testing.assert_allclose(w, w_ref, rtol=2e-7)   # the grip rounded to 7 digits in the Python model
+
+
+def test_cantilever_lap_case_from_the_spec_runs_the_face():
+    case = resolve_case("docs/case-files/bolted-lap-cantilever.toml")
+    s = case.summary()
+    assert s["joint_stiffness_total"] == pytest.approx(1.0e7)
+    assert s["mass_kg"] == pytest.approx(2 * 0.3 * 0.03 * 0.005 * 2700 + 0.015)
+    nc = case.nonlinear_model(mode=2)
+    assert nc.mode == 2 and len(nc.joints) == 2
+
+
+def test_capability_missing_is_one_line():
+    with pytest.raises(InputError, match="case 'lumped' has no FE strip model"):
+        resolve_case("lumped").fe_model()
+    with pytest.raises(InputError, match="unknown case 'nope'"):
+        resolve_case("nope")
+
+
+def test_convergence_against_the_finest_mesh_falls_with_refinement():
+    from cases.case_convergence import case_convergence
+
+    r = case_convergence(resolve_case("docs/case-files/bolted-lap-cantilever.toml"), levels=4)
+    change = np.array(r["relative_change_vs_finest"])[:-1, :3]
+    assert np.all(np.diff(change, axis=0) < 0)
+    # nodal contact springs integrate the interface by the trapezoidal rule: O(h^2)
+    assert np.all((np.array(r["rate"][:3]) > 1.8) & (np.array(r["rate"][:3]) < 2.3))
+    assert r["element_size_m"] == [0.005, 0.0025, 0.00125, 0.000625]
+
+
+def test_case_check_and_modes_on_the_command_line(capsys):
+    import json
+
+    from cli.main import main
+
+    assert main(["case", "check", "docs/case-files/bolted-lap-cantilever.toml", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    kinds = {p["parameter"]: p["kind"] for p in s["parameters"]}
+    assert kinds["interface.0.kt"] == "given" and kinds["sensor.0.mass"] == "default"
+    assert main(["modes", "--case", "brb", "--band", "0", "500", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["bending_order"] for r in rows if r["frequency_hz"] > 1] == [1, 2]
+
+
+def _with_calibration(tmp_path, text: str):
+    p = tmp_path / "cal.toml"
+    p.write_text(open("docs/case-files/bolted-lap-cantilever.toml").read() + text)
+    return read_case_file(p)
+
+
+def test_calibration_reaches_its_target_and_says_when_it_cannot(tmp_path):
+    cf = _with_calibration(tmp_path, '\n[calibrate]\nparameters = ["mass.0.mass"]\n'
+                                     'frequencies_hz = [13.5]\n')
+    assert cf.kinds["mass.0.mass"][0] == "calibrated"
+    out, report = calibrate(cf)
+    assert report["converged"] and report["targets"][0]["bending_mode"] == 1
+    m = out.masses[0].mass
+    assert m > 0.015                                  # heavier exciter, lower frequency
+    model = build_model(out).model                    # a second build at that mass
+    assert model.bending_mode_frequency(1) == pytest.approx(13.5, rel=1e-6)
+    cf = _with_calibration(tmp_path, '\n[calibrate]\nparameters = ["mass.0.mass"]\n'
+                                     'frequencies_hz = [40.0]\n')
+    _, report = calibrate(cf)         # no exciter mass >= 0 lifts mode 1 from 13.9 to 40 Hz
+    assert not report["converged"]
+    assert abs(report["targets"][0]["calibrated_hz"] / 40.0 - 1) == pytest.approx(
+        report["max_relative_error"]) and report["max_relative_error"] > 0.1
