@@ -4,10 +4,12 @@ Every sub-command lives in ``cli/commands/<name>.py``. The rules every command f
 
 Bad input
     Every argument and input file is checked before any work starts. Bad input
-    (``ValueError``, including :class:`ident.errors.InputError`, or an unreadable file)
-    ends with one line on stderr naming the input and the reason, and exit status 2;
-    never a traceback. A failure that is not the input's fault (a solver that does not
-    converge) is one line too, with exit status 1 (``IWANFE_TRACEBACK=1`` shows where).
+    (:class:`ident.errors.InputError`, a ``ValueError`` raised by the project's own
+    checks, or an unreadable file) ends with one line on stderr naming the input and the
+    reason, and exit status 2; never a traceback. A failure that is not the input's
+    fault (a solver that does not converge, a ``ValueError`` or ``LinAlgError`` raised
+    inside numpy or scipy: :func:`input_fault`) is one line too, with exit status 1
+    (``IWANFE_TRACEBACK=1`` shows where).
 Interrupts
     Ctrl-C prints ``iwanfe: interrupted`` and exits with status 130, without traceback,
     wherever it lands (compiled code included: :mod:`runs.interrupt` defers it to the
@@ -29,6 +31,7 @@ import importlib
 import os
 import re
 import sys
+from pathlib import Path
 
 # One BLAS thread unless the user says otherwise, set before numpy loads: the models
 # are small (hundreds of DOFs), threads only contend on a few cores, and a serial run
@@ -120,6 +123,35 @@ def _one_line(prefix: str, exc: BaseException) -> str:
     return lines[0] if lines else prefix + exc.__class__.__name__
 
 
+#: Top-level packages whose own ``ValueError`` is a verdict on the input.
+PROJECT_PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "cases", "cli", "viz")
+_ROOT = Path(__file__).resolve().parents[1]
+
+
+def input_fault(exc: BaseException) -> bool:
+    """Whether ``exc`` says the input is bad (exit 2) rather than the program failed
+    (exit 1): an ``InputError`` or an ``OSError`` always; a ``ValueError`` only when the
+    project raised it itself (its innermost frame lies in a project package): one raised
+    inside numpy or scipy (a singular matrix, an optimizer's inconsistent bounds) is an
+    internal failure, whatever its class."""
+    from ident.errors import InputError
+
+    if isinstance(exc, (InputError, OSError)):
+        return True
+    if not isinstance(exc, ValueError) or type(exc).__name__ == "LinAlgError":
+        return False
+    tb = exc.__traceback__
+    if tb is None:
+        return True
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    try:
+        rel = Path(tb.tb_frame.f_code.co_filename).resolve().relative_to(_ROOT)
+    except ValueError:
+        return False
+    return rel.parts[0] in PROJECT_PACKAGES
+
+
 def _run(argv) -> int:
     """Parse ``argv`` and run the chosen command."""
     parser = build_parser()
@@ -152,14 +184,13 @@ def run_guarded(call, restore: bool = True) -> int:
             raise
         except KeyboardInterrupt:
             return _interrupted()
-        except (ValueError, OSError) as exc:
+        except Exception as exc:
             if interrupt.requested() or interrupt.caused_by_interrupt(exc):
                 return _interrupted()
-            print(_one_line("iwanfe: error: ", exc), file=sys.stderr)
-            return 2
-        except Exception as exc:  # not the input's fault: one line, exit 1
-            if interrupt.requested() or interrupt.caused_by_interrupt(exc):
-                return _interrupted()
+            if input_fault(exc):
+                print(_one_line("iwanfe: error: ", exc), file=sys.stderr)
+                return 2
+            # not the input's fault: one line, exit 1
             if os.environ.get("IWANFE_TRACEBACK"):
                 raise
             print(_one_line(f"iwanfe: failed: {exc.__class__.__name__}: ", exc)

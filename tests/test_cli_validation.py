@@ -270,3 +270,41 @@ def test_failure_that_is_not_the_inputs_fault_is_one_line(monkeypatch):
     rc, out, err = run(JOINT)
     assert rc == 1 and err.count("\n") == 1
     assert "RuntimeError: solver did not converge" in err and "IWANFE_TRACEBACK" in err
+
+
+def test_a_library_failure_is_internal_not_bad_input(capsys):
+    """A ValueError raised inside scipy (an optimizer's inconsistent bounds, issue 19) or
+    numpy's LinAlgError is the program's failure: exit 1, one line; the project's own
+    ValueError and InputError stay exit 2."""
+    import numpy as np
+    from scipy.optimize import least_squares
+
+    from cli.main import run_guarded
+    from ident.errors import InputError
+
+    def bad_bounds():
+        least_squares(lambda x: x, [0.0], bounds=([1.0], [0.0]))
+
+    def singular():
+        np.linalg.cholesky(np.array([[1.0, 2.0], [2.0, 1.0]]))
+
+    def own_check():      # the project's own check, raised in joints/iwan.py
+        from joints.iwan import IwanParameters
+        IwanParameters(chi=0.5, K_T=1e5, F_S=1.0, beta=1.0)
+
+    def test_code_check():  # a ValueError raised outside the project's packages
+        raise ValueError("not the project's")
+
+    def input_error():
+        raise InputError("levels.csv:3:2: not a number")
+
+    assert run_guarded(bad_bounds) == 1
+    assert "iwanfe: failed: ValueError" in capsys.readouterr().err
+    assert run_guarded(singular) == 1
+    assert "LinAlgError" in capsys.readouterr().err
+    assert run_guarded(own_check) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("iwanfe: error: ") and "chi" in err and "\n" not in err
+    assert run_guarded(test_code_check) == 1
+    capsys.readouterr()
+    assert run_guarded(input_error) == 2
