@@ -50,7 +50,8 @@ thickness = {H}
 x = [{LAP[0]}, {LAP[1]}]
 thickness = {H / 2}
 z = {H / 4}
-""" + "".join(f'[[interface]]\nbeams = ["left", "right"]\n{body}\n' for body in interfaces) + extra + """
+""" + "".join(f'[[interface]]\nbeams = ["left", "right"]\n{body}\n' for body in interfaces)
+    text += extra + """
 [mesh]
 element_size = 0.005
 """
@@ -105,7 +106,8 @@ def test_part_tied_lap_lies_between_contact_only_and_fully_tied(tmp_path):
 def test_a_point_next_to_a_joint_shares_its_node(tmp_path):
     """A mass 1e-5 m from a joint element (the crash of issue 20) is put on the joint's
     node: the model equals the one with the mass exactly there."""
-    joint = _itf(*LAP, tangential="joint", more="joint_elements = 9\nkt = 1e9\nfs = 100.0\n" + JOINT)
+    joint = _itf(*LAP, tangential="joint",
+                 more="joint_elements = 9\nkt = 1e9\nfs = 100.0\n" + JOINT)
     x_joint = 0.16 + 4 * 0.01
 
     def mass(x):

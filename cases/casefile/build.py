@@ -4,8 +4,8 @@ Nodes sit at every x the file names (beam and section ends, supports, interfaces
 masses, drive, sensors), elements in between no longer than ``[mesh] element_size``
 (:func:`fe.mesh.mesh_with_element_size`); a point (joint, mass, drive, sensor) within
 :data:`SNAP_FRACTION` of the element size of another named x shares its node (no sliver
-elements), two range ends that close are refused; every beam takes the nodes of its own range, so
-two stacked beams share their nodes over an interface. Each beam's reference line is its
+elements), two range ends that close are refused; every beam takes the nodes of its own
+range, so two stacked beams share their nodes over an interface. Each beam's reference line is its
 ``z``; a section with another centroid height is an eccentric element
 (:mod:`fe.stacked`). At an interface at height ``z_i`` (the lower beam's top face):
 
@@ -84,7 +84,8 @@ def _named_x(cf) -> tuple[list, list]:
     structural, points = [], []
     for i, b in enumerate(cf.beams):
         structural += [(v, f"beam.{i}.x") for v in b.x]
-        structural += [(v, f"beam.{i}.section.{j}.x") for j, s in enumerate(b.sections) for v in s.x]
+        structural += [(v, f"beam.{i}.section.{j}.x")
+                       for j, s in enumerate(b.sections) for v in s.x]
     for i, s in enumerate(cf.supports):
         (structural if s.kind == "clamp" else points).extend((v, f"support.{i}.x") for v in s.x)
     for i, itf in enumerate(cf.interfaces):
@@ -113,9 +114,10 @@ def breakpoints(cf, element_size: float) -> np.ndarray:
     kept = [structural[0]]
     for x, label in structural[1:]:
         if x - kept[-1][0] > NODE_TOLERANCE:
-            if x - kept[-1][0] < snap:
+            gap = x - kept[-1][0]
+            if gap < snap:
                 raise CaseFileError(
-                    f"{cf.path}: [{label.rsplit('.', 1)[0]}] x: {x:g} m lies {x - kept[-1][0]:.3g} m "
+                    f"{cf.path}: [{label.rsplit('.', 1)[0]}] x: {x:g} m lies {gap:.3g} m "
                     f"from {kept[-1][1]} = {kept[-1][0]:g} m; make them equal or at least "
                     f"{snap:.3g} m ({SNAP_FRACTION:g} element_size) apart")
             kept.append((x, label))
