@@ -2,8 +2,10 @@
 
 Nodes sit at every x the file names (beam and section ends, supports, interfaces, joints,
 masses, drive, sensors), elements in between no longer than ``[mesh] element_size``
-(:func:`fe.mesh.mesh_with_element_size`); every beam takes the nodes of its own range, so
-two stacked beams share their nodes over an interface. Each beam's reference line is its
+(:func:`fe.mesh.mesh_with_element_size`); a point (joint, mass, drive, sensor) within
+:data:`SNAP_FRACTION` of the element size of another named x shares its node (no sliver
+elements), two range ends that close are refused; every beam takes the nodes of its own
+range, so two stacked beams share their nodes over an interface. Each beam's reference line is its
 ``z``; a section with another centroid height is an eccentric element
 (:mod:`fe.stacked`). At an interface at height ``z_i`` (the lower beam's top face):
 
@@ -32,12 +34,18 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from cases.casefile.tables import CaseFileError
 from fe.assembly import coupling_rows
 from fe.beam import THETA, U, W
 from fe.mesh import DofMap, line_mesh, segmented_line_mesh
 from fe.stacked import StackedModel, StripMesh, assemble_stack, interface_rows
 
 NODE_TOLERANCE = 1e-9  # m: x values closer than this are one node
+#: named points (joints, masses, drive, sensors) closer than this fraction of the element
+#: size to another named x share its node: an element of 1e-5 m between a bolt mass and a
+#: joint element has a bending stiffness ~1e18 N/m, 1e15 times a 5 mm element's, and the
+#: free-free stiffness matrix's rigid-body modes drown in round-off (a Cholesky failure)
+SNAP_FRACTION = 0.1
 #: a tied tangential contact: this many times the through-thickness stiffness (a penalty
 #: for "no slip"; 1e3 keeps K well conditioned, the tied lap then equals the monolithic
 #: beam to the mesh error, tests/test_case_file.py)
@@ -69,27 +77,63 @@ def joint_shares(itf) -> np.ndarray:
     return w / w.sum()
 
 
-def _named_x(cf) -> np.ndarray:
-    xs = []
-    for b in cf.beams:
-        xs += list(b.x) + [v for s in b.sections for v in s.x]
-    xs += [v for s in cf.supports for v in s.x]
-    for itf in cf.interfaces:
-        xs += list(itf.x)
+def _named_x(cf) -> tuple[list, list]:
+    """``(structural, points)``: lists of ``(x, label)`` (m, ``table.i.key``). Structural x
+    (beam, section, support and interface ends) bound element properties and ranges;
+    points (joints, masses, drive, sensors) load one node."""
+    structural, points = [], []
+    for i, b in enumerate(cf.beams):
+        structural += [(v, f"beam.{i}.x") for v in b.x]
+        structural += [(v, f"beam.{i}.section.{j}.x")
+                       for j, s in enumerate(b.sections) for v in s.x]
+    for i, s in enumerate(cf.supports):
+        (structural if s.kind == "clamp" else points).extend((v, f"support.{i}.x") for v in s.x)
+    for i, itf in enumerate(cf.interfaces):
+        structural += [(v, f"interface.{i}.x") for v in itf.x]
         if itf.tangential == "joint":
-            xs += list(joint_positions(itf))
-    xs += [p.x for p in (*cf.masses, *cf.sensors)] + ([cf.drive.x] if cf.drive else [])
-    x = np.unique(np.asarray(xs, dtype=float))
-    keep = np.concatenate([[True], np.diff(x) > NODE_TOLERANCE])
-    return x[keep]
+            key = "joints_at" if itf.joints_at is not None else "joint_elements"
+            points += [(v, f"interface.{i}.{key}") for v in joint_positions(itf)]
+    points += [(p.x, f"mass.{i}.x") for i, p in enumerate(cf.masses)]
+    points += [(p.x, f"sensor.{i}.x") for i, p in enumerate(cf.sensors)]
+    points += [(cf.drive.x, "drive.x")] if cf.drive else []
+    return structural, points
+
+
+def snap_distance(element_size: float) -> float:
+    """Named points closer than this (m) share one node (module docstring)."""
+    return SNAP_FRACTION * element_size
+
+
+def breakpoints(cf, element_size: float) -> np.ndarray:
+    """The x that must be nodes (m): every structural x, and every point not within
+    :func:`snap_distance` of one already kept (structural x first, then points in order of
+    x). Two structural x closer than the snap distance (but not equal) are refused."""
+    structural, points = _named_x(cf)
+    snap = snap_distance(element_size)
+    structural.sort()
+    kept = [structural[0]]
+    for x, label in structural[1:]:
+        if x - kept[-1][0] > NODE_TOLERANCE:
+            gap = x - kept[-1][0]
+            if gap < snap:
+                raise CaseFileError(
+                    f"{cf.path}: [{label.rsplit('.', 1)[0]}] x: {x:g} m lies {gap:.3g} m "
+                    f"from {kept[-1][1]} = {kept[-1][0]:g} m; make them equal or at least "
+                    f"{snap:.3g} m ({SNAP_FRACTION:g} element_size) apart")
+            kept.append((x, label))
+    xs = [x for x, _ in kept]
+    for x, _ in sorted(points):
+        if np.min(np.abs(np.asarray(xs) - x)) >= snap:
+            xs.append(x)
+    return np.sort(np.asarray(xs, dtype=float))
 
 
 def node_positions(cf, element_size: float | None = None) -> np.ndarray:
-    """All node positions (m): the named x, elements between them no longer than the
-    element size (to 1e-6 relative, so a calibrated length rounded in its last digits does
-    not add an element)."""
-    b = _named_x(cf)
+    """All node positions (m): the breakpoints (:func:`breakpoints`), elements between
+    them no longer than the element size (to 1e-6 relative, so a calibrated length rounded
+    in its last digits does not add an element)."""
     h = cf.element_size if element_size is None else element_size
+    b = breakpoints(cf, h)
     counts = np.maximum(1, np.ceil(np.diff(b) / h - 1e-6).astype(int))
     return segmented_line_mesh(b, counts).x
 
@@ -108,8 +152,8 @@ def _strip(cf, beam, x_all: np.ndarray) -> StripMesh:
 class _Nodes:
     """Node and DOF lookup of the strips."""
 
-    def __init__(self, strips):
-        self.strips = {s.name: s for s in strips}
+    def __init__(self, strips, snap: float):
+        self.strips, self.snap = {s.name: s for s in strips}, snap
         self.maps, offset = {}, 0
         for s in strips:
             self.maps[s.name] = DofMap(s.n_nodes, 3, offset)
@@ -117,9 +161,10 @@ class _Nodes:
         self.n = offset
 
     def node(self, beam: str, x: float) -> int:
+        """The node at ``x`` or, for a point snapped to a neighbour, the nearest node."""
         xs = self.strips[beam].x
         i = int(np.argmin(np.abs(xs - x)))
-        if abs(xs[i] - x) > NODE_TOLERANCE:
+        if abs(xs[i] - x) >= self.snap:
             raise ValueError(f"no node of beam {beam!r} at x = {x:g} m")
         return i
 
@@ -153,7 +198,7 @@ def build_model(cf) -> BuiltCase:
     """Assemble the case file's linear model (module docstring)."""
     x_all = node_positions(cf)
     strips = [_strip(cf, b, x_all) for b in cf.beams]
-    nodes = _Nodes(strips)
+    nodes = _Nodes(strips, snap_distance(cf.element_size))
     fixed, couplings = [], []
     for s in cf.supports:
         for beam in s.beams:
@@ -197,6 +242,7 @@ def build_model(cf) -> BuiltCase:
             kj = itf.kt * joint_shares(itf)
             jn_lo = [nodes.node(lo_b.name, v) for v in xj]
             jn_up = [nodes.node(up_b.name, v) for v in xj]
+            xj = nodes.strips[lo_b.name].x[jn_lo]      # a snapped joint sits at its node
             joint_rows.append(interface_rows(m_up, m_lo, jn_up, jn_lo, nodes.n, lever_up, lever_lo))
             joint_k.append(kj)
             joint_x.append(xj)

@@ -1,0 +1,133 @@
+"""Case files whose interfaces cover part of a lap or lie side by side on one beam pair
+(issue 20: these crashed with a Cholesky failure from a 1e-5 m sliver element), checked
+against independent truth: adjacent interfaces equal the single interface they split
+(the stiffness matrices are the same sum of springs), a part-tied lap lies between the
+lap with only normal contact there and the fully tied lap (Rayleigh: adding stiffness
+raises every eigenvalue), and a point snapped onto a neighbour's node equals the file
+with the point exactly there."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cases.casefile.build import build_model
+from cases.casefile.schema import read_case_file
+from cases.casefile.tables import CaseFileError
+
+E, RHO, B, H, L = 70e9, 2700.0, 0.03, 0.005, 0.4
+LAP = (0.16, 0.24)
+
+JOINT = 'law = "iwan4"\nchi = -0.5\nbeta = 1.0\n'
+
+
+def _lap(tmp_path, interfaces: list[str], extra: str = "", name="lap", rigid=3) -> np.ndarray:
+    """First three elastic free-free frequencies (Hz) of a notched lap (BRB style) with
+    the given [[interface]] bodies; ``rigid`` zero-frequency modes expected (a lap held
+    only by frictionless contact adds a fourth: the halves slide along each other)."""
+    text = f"""[case]
+name = "{name}"
+[[material]]
+name = "al"
+E = {E}
+rho = {RHO}
+[[beam]]
+name = "left"
+material = "al"
+x = [0.0, {LAP[1]}]
+width = {B}
+thickness = {H}
+[[beam.section]]
+x = [{LAP[0]}, {LAP[1]}]
+thickness = {H / 2}
+z = {-H / 4}
+[[beam]]
+name = "right"
+material = "al"
+x = [{LAP[0]}, {L}]
+width = {B}
+thickness = {H}
+[[beam.section]]
+x = [{LAP[0]}, {LAP[1]}]
+thickness = {H / 2}
+z = {H / 4}
+""" + "".join(f'[[interface]]\nbeams = ["left", "right"]\n{body}\n' for body in interfaces)
+    text += extra + """
+[mesh]
+element_size = 0.005
+"""
+    p = tmp_path / f"{name}.toml"
+    p.write_text(text)
+    model = build_model(read_case_file(p)).model
+    omega, _ = model.modes(10)
+    assert np.all(omega[:rigid] < 1e-3 * omega[rigid])   # the rigid-body modes, no more
+    return omega[rigid:rigid + 3] / (2 * np.pi)
+
+
+def _itf(x0, x1, normal="tied", tangential="tied", more=""):
+    return f'x = [{x0}, {x1}]\nnormal = "{normal}"\ntangential = "{tangential}"\n{more}'
+
+
+def test_adjacent_tied_interfaces_equal_the_single_tied_interface(tmp_path):
+    one = _lap(tmp_path, [_itf(*LAP)], name="one")
+    three = _lap(tmp_path, [_itf(0.16, 0.18), _itf(0.18, 0.22), _itf(0.22, 0.24)], name="three")
+    np.testing.assert_allclose(three, one, rtol=1e-9)
+
+
+def test_adjacent_joint_interfaces_equal_the_joint_interface_they_split(tmp_path):
+    """kt split by length, elements at the same positions: the shared end node takes half
+    its share from each side, so the joint springs are the same."""
+    kt = 2.0e9
+    one = _lap(tmp_path, [_itf(*LAP, tangential="joint",
+                               more=f"joint_elements = 17\nkt = {kt}\nfs = 100.0\n" + JOINT)],
+               name="one")
+    two = _lap(tmp_path, [_itf(0.16, 0.20, tangential="joint",
+                               more=f"joint_elements = 9\nkt = {kt / 2}\nfs = 50.0\n" + JOINT),
+                          _itf(0.20, 0.24, tangential="joint",
+                               more=f"joint_elements = 9\nkt = {kt / 2}\nfs = 50.0\n" + JOINT)],
+               name="two")
+    np.testing.assert_allclose(two, one, rtol=1e-8)    # round-off of the split sums, ~2e-9
+
+
+def test_part_tied_lap_lies_between_contact_only_and_fully_tied(tmp_path):
+    """Interface over the middle of the lap only (ends open): tying it raises every
+    frequency above the same lap with frictionless contact there, and tying the ends
+    too raises them further (the fully tied lap, which equals the monolithic beam)."""
+    ends_open = [_itf(0.18, 0.22, tangential="free")]
+    lower = _lap(tmp_path, ends_open, name="lower", rigid=4)
+    part = _lap(tmp_path, [_itf(0.18, 0.22)], name="part")
+    full = _lap(tmp_path, [_itf(0.16, 0.18), _itf(0.18, 0.22), _itf(0.22, 0.24)], name="full")
+    assert np.all(lower < part) and np.all(part < full)
+    beta_l = np.array([4.7300407449, 7.8532046241, 10.9956078380])
+    monolithic = beta_l**2 / (2 * np.pi * L**2) * np.sqrt(E * H**2 / (12 * RHO))
+    np.testing.assert_allclose(full, monolithic, rtol=2e-3)
+    assert part[0] < 0.97 * full[0]      # the open lap ends do soften the first mode
+
+
+def test_a_point_next_to_a_joint_shares_its_node(tmp_path):
+    """A mass 1e-5 m from a joint element (the crash of issue 20) is put on the joint's
+    node: the model equals the one with the mass exactly there."""
+    joint = _itf(*LAP, tangential="joint",
+                 more="joint_elements = 9\nkt = 1e9\nfs = 100.0\n" + JOINT)
+    x_joint = 0.16 + 4 * 0.01
+
+    def mass(x):
+        return f'[[mass]]\nbeam = "right"\nx = {x}\nmass = 0.02\nlabel = "bolt"\n'
+    near = _lap(tmp_path, [joint], mass(x_joint + 1e-5), name="near")
+    exact = _lap(tmp_path, [joint], mass(x_joint), name="exact")
+    np.testing.assert_allclose(near, exact, rtol=1e-12)
+
+
+def test_range_ends_closer_than_the_snap_distance_are_refused(tmp_path):
+    with pytest.raises(CaseFileError, match=r"\[interface\.1\] x: .* from interface\.0\.x"):
+        _lap(tmp_path, [_itf(0.16, 0.20), _itf(0.20001, 0.24)], name="gap")
+
+
+def test_shipped_patch_layouts_build(tmp_path):
+    """The shipped BRB (bolt patch and lap ends as three joint interfaces) has exactly
+    three rigid-body modes and stuck-stiffness shares summing to 1 per interface."""
+    built = build_model(read_case_file("cases/brb/brb.toml"))
+    omega, _ = built.model.modes(6)
+    assert np.all(omega[:3] < 1e-3 * omega[3])
+    for i in range(3):
+        assert sum(j["share"] for j in built.joint_table if j["interface"] == i) == \
+            pytest.approx(1.0, rel=1e-12)
