@@ -65,7 +65,7 @@ def campaign_protocol(name: str, hb: HBSettings):
         return HBProtocol(hb)
     if name == "newmark":
         return NewmarkProtocol(steps_per_period=NEWMARK_STEPS, tol=NEWMARK_TOL, hb_start=hb,
-                               macro_steps_per_period=NEWMARK_MACRO_STEPS)
+                               macro_steps_per_period=NEWMARK_MACRO_STEPS, period_newton=True)
     raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {name!r}")
 
 
