@@ -13,11 +13,11 @@
    start-up (its impulse response down to 5 %: :func:`settle_time`) and reflected
    evenly about them (the mode is symmetric about its extremum, up to half a sample),
    filtered and transformed extended, and cut back. What is left of the end effects is
-   the kink of the envelope at the reflection, smoothed away within
-   :data:`EDGE_PERIODS` periods, which are trimmed at both ends. Trim per end =
-   filter start-up + up to half a period + 3 periods (+ 1 period of the Hilbert
-   track's moving averages); stated in the result. Amplitudes are divided by the
-   band-pass gain at the row's frequency.
+   the kink of the envelope at the reflection (spread over +-1 period by the moving
+   averages of step 3); :data:`EDGE_PERIODS` periods are trimmed at both ends. Trim per
+   end = filter start-up + up to half a period + 2 periods, stated in the result
+   (about 7.5 cycles with the default band). Amplitudes are divided by the band-pass
+   gain at the row's frequency.
 3. Hilbert (:func:`hilbert_track`): envelope ``a = |z|`` and phase ``theta =
    unwrap(arg z)``. The Hilbert envelope of a damped sinusoid ripples at twice its
    frequency (the negative-frequency half of its spectrum, relative amplitude about
@@ -50,7 +50,7 @@ FILTER_ORDER = 4
 #: extremum of the mode is then located within 0.05/(2 pi) of a period).
 SETTLE_FRACTION = 5e-2
 #: Periods trimmed at both ends after the reflection (the smoothed envelope kink).
-EDGE_PERIODS = 3
+EDGE_PERIODS = 2
 MIN_CYCLES = 3
 DEFAULT_ROWS = 12
 
@@ -79,7 +79,8 @@ class Isolated:
 
     time_s: np.ndarray
     y: np.ndarray          # band-passed (modal) signal on the kept span
-    analytic: np.ndarray   # its analytic signal (Hilbert), end effects handled
+    extended: np.ndarray   # analytic signal (Hilbert) of the reflected record
+    keep: slice            # the kept span within ``extended``
     band_hz: tuple
     frequency_hz: float    # dominant peak
     trim_s: tuple          # (start, end) trimmed from the record, s
@@ -172,7 +173,7 @@ def isolate_mode(time_s, x, band_hz=None, reference=0) -> Isolated:
     edge = EDGE_PERIODS * period
     keep = slice(L + edge, L + seg.size - edge)
     return Isolated(time_s=t[i_s:i_e + 1][edge:seg.size - edge],
-                    y=np.real(z[keep]), analytic=z[keep], band_hz=band, frequency_hz=f_pk,
+                    y=np.real(z[keep]), extended=z, keep=keep, band_hz=band, frequency_hz=f_pk,
                     trim_s=((i_s + edge) / fs, (t.size - 1 - i_e + edge) / fs),
                     sos=sos, shape=shape, notes=notes)
 
@@ -184,13 +185,12 @@ def _smooth(v, period):
 
 
 def hilbert_track(iso: Isolated):
-    """(t, ln a, theta, samples per half cycle) of the smoothed Hilbert track (a period
-    at each end, where the moving averages run out of samples, left out)."""
+    """(t, ln a, theta, samples per half cycle) of the Hilbert track, smoothed on the
+    reflected record and cut to the kept span."""
     period = max(1, int(round(iso.sample_rate / iso.frequency_hz)))
-    ln_a = _smooth(np.log(np.abs(iso.analytic)), period)
-    theta = _smooth(np.unwrap(np.angle(iso.analytic)), period)
-    keep = slice(period, -period)
-    return iso.time_s[keep], ln_a[keep], theta[keep], period / 2.0
+    ln_a = _smooth(np.log(np.abs(iso.extended)), period)[iso.keep]
+    theta = _smooth(np.unwrap(np.angle(iso.extended)), period)[iso.keep]
+    return iso.time_s, ln_a, theta, period / 2.0
 
 
 def peak_track(iso: Isolated):
