@@ -15,7 +15,9 @@ stepped-sine series")::
   it held the drive-point response amplitude), ``run_order`` (integer >= 1, when the
   level was measured), ``excitation`` (> 0: the level held: the drive amplitude, force or
   voltage, under force control; the drive-point response amplitude, in the unit of the
-  FRF's response, under response control) and ``reference`` (label of the drive point);
+  FRF's response, under response control), ``reference`` (label of the drive point)
+  and ``test`` (``stepped-sine`` default, or ``random``: H1 averaged over a random
+  record, ``excitation`` its drive RMS; :mod:`ident.frf_header`);
 * then one header line: ``freq_hz`` (Hz, strictly increasing, > 0; any spacing) and,
   for every response point ``P``, the pair ``re_P`` / ``im_P`` (real and imaginary part
   of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
@@ -31,7 +33,7 @@ response point; all must share the reference node/direction and the abscissa.
 Point label = ``"<node><+|-><X|Y|Z|RX|RY|RZ>"`` (``"<node>"`` for a scalar direction).
 Quantity from the ordinate specific data type (8 displacement -> receptance,
 11 velocity -> mobility, 12 acceleration -> accelerance). The keys ``excitation``,
-``control``, ``run_order`` and ``reference`` may stand in the ID lines of the first data
+``control``, ``run_order``, ``reference`` and ``test`` may stand in the ID lines of the first data
 set as ``key=value`` (the writer puts them in ID line 4); ``reference`` there overrides
 the label built from the reference node. A universal file has no force column.
 """
@@ -47,8 +49,9 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError, text_file
-from ident.frf_header import (CONTROLS, HEADER_KEYS, header_values, id_line_values,
-                              parse_control, parse_excitation, parse_run_order)
+from ident.frf_header import (CONTROLS, FRF_TESTS, HEADER_KEYS, header_values,
+                              id_line_values, parse_control, parse_excitation,
+                              parse_run_order, parse_test)
 from ident.poles import QUANTITIES
 from ident.uff_sets import read_uff_sets
 
@@ -77,6 +80,7 @@ class FRFSet:
     control : "force", "response" or None (not stated).
     run_order : chronological order of the level (int >= 1) or None.
     force : (n,) measured force amplitude at the reference per line (N) or None.
+    test : "stepped-sine", "random" or None (not stated: stepped sine).
     """
 
     freq_hz: np.ndarray
@@ -89,6 +93,7 @@ class FRFSet:
     control: str | None = None
     run_order: int | None = None
     force: np.ndarray | None = None
+    test: str | None = None
 
     def __post_init__(self):
         self.freq_hz = np.asarray(self.freq_hz, float)
@@ -102,6 +107,8 @@ class FRFSet:
         if self.quantity is not None and self.quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, "
                              f"got {self.quantity!r}")
+        if self.test is not None and self.test not in FRF_TESTS:
+            raise ValueError(f"test must be one of {', '.join(FRF_TESTS)}, got {self.test!r}")
         if self.control is not None and self.control not in CONTROLS:
             raise ValueError(f"control must be force or response, got {self.control!r}")
         if self.force is not None:
@@ -219,8 +226,9 @@ def read_frf_csv(path) -> FRFSet:
     if "run_order" in meta:
         ln, text = meta["run_order"]
         run_order = parse_run_order(text, f"{src}:{ln}:run_order")
+    test = parse_test(meta["test"][1], f"{src}:{meta['test'][0]}:test") if "test" in meta else None
     return FRFSet(freq, frf, points, quantity, excitation, reference, src, control,
-                  run_order, force)
+                  run_order, force, test)
 
 
 
@@ -291,7 +299,7 @@ def read_frf_uff(path) -> FRFSet:
         raise InputError(f"{src}: non-finite frequency or FRF value")
     reference = keys.get("reference") or _label(*refs.pop())
     return FRFSet(x, frf, points, quantity, keys.get("excitation"), reference, src,
-                  keys.get("control"), keys.get("run_order"))
+                  keys.get("control"), keys.get("run_order"), test=keys.get("test"))
 
 
 def write_frf_uff(path, frfset: FRFSet) -> None:

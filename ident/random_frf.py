@@ -1,0 +1,75 @@
+"""FRF sets of a random-excitation series: the response RMS of a mode, the test's signature.
+
+``shared/spec/measured-data.md``, "Other test types": a ``random`` level is an H1 FRF
+averaged over a broadband random record; its ``excitation`` is the drive RMS and its
+``response_amplitude`` the response RMS in the mode's band.
+
+Response RMS (:func:`mode_response_rms`). With the drive's power spectral density flat
+over the file's lines, ``S_ff = e^2 / (f_last - f_first)`` (one-sided, per Hz; an
+assumption: a file gives no spectrum, and a shaker's force drop at resonance breaks
+it), the mode's response RMS at a point is
+
+    sigma = e sqrt( int_0^inf |H_r(f)|^2 df / (f_last - f_first) )
+
+with ``H_r`` the identified mode's own FRF in the file's quantity (residue over pole
+and its conjugate). Only ratios between levels enter chi; the assumption sets the
+absolute value (and so R).
+
+Signature (:func:`random_signature`): a level not stated as random whose FRF looks
+averaged. A ``coherence`` column belongs to an averaged (random) estimate; otherwise
+the line-to-line noise is measured by the fourth difference along frequency (the FRF
+itself contributes ``(df / half-power width)^4``) and regressed on ``|H|`` in log-log:
+a stepped sine measures each line on its own, its noise follows the response
+(slope near 1); the noise of an H1 estimate from output noise or nonlinear distortion
+averaged over the record is near-uniform across lines (slope near 0).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import integrate
+
+from ident.poles import modal_receptance
+
+_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
+#: Below this log-log slope of the line noise on |H| the noise is called uniform.
+UNIFORM_NOISE_SLOPE = 0.5
+#: Fourth-difference noise over |H| needed in the top lines for the slope to mean anything.
+MIN_NOISE = 1e-4
+
+
+def mode_response_rms(mode, point: int, quantity: str, freq_hz, drive_rms: float) -> float:
+    """Response RMS of one identified mode at ``point`` under a drive of RMS
+    ``drive_rms`` flat over ``freq_hz`` (module doc), in the FRF's response unit."""
+    f = np.asarray(freq_hz, float)
+    shape = np.atleast_1d(mode.shape)[point]
+    power = _POWER[quantity]
+
+    def h2(fr):
+        h = modal_receptance(mode.pole, shape, fr)[0, 0] * (2 * np.pi * fr) ** power
+        return abs(h) ** 2
+
+    fd = mode.pole.imag / (2 * np.pi)
+    near = integrate.quad(h2, 0.0, 2 * fd, points=[fd], limit=400, epsrel=1e-10)[0]
+    far = integrate.quad(h2, 2 * fd, np.inf, limit=400, epsrel=1e-10)[0]
+    return float(drive_rms * np.sqrt((near + far) / (f[-1] - f[0])))
+
+
+def random_signature(freq_hz, frf, coherence=None) -> str | None:
+    """One line if an FRF set looks like an averaged random estimate (module doc), else
+    None. ``frf``: (n_lines, n_points) complex; ``coherence``: any column of them."""
+    if coherence is not None:
+        return "the file has a coherence column: an averaged (random-excitation) FRF"
+    h = np.abs(np.asarray(frf))
+    d4 = np.abs(np.diff(np.asarray(frf), 4, axis=0)) / np.sqrt(70.0)
+    if d4.shape[0] < 16:
+        return None
+    mag = h[2:-2]
+    keep = (mag > 0) & (d4 > 0)
+    x, y = np.log(mag[keep]), np.log(d4[keep])
+    if np.median(d4[keep] / mag[keep]) < MIN_NOISE or np.ptp(x) < np.log(10.0):
+        return None
+    slope = float(np.polyfit(x, y, 1)[0])
+    if slope < UNIFORM_NOISE_SLOPE:
+        return (f"line-to-line noise uniform across lines (log-log slope {slope:.2f} on |H|; "
+                "a stepped sine's follows the response, near 1): an averaged random FRF?")
+    return None
