@@ -31,15 +31,45 @@ __all__ = ["identify_record", "compare_ringdown", "comparison_rows"]
 #: Acceptance of issue 21: ring-down against EPMC at every amplitude of the window.
 FREQUENCY_TARGET = 1e-4
 ZETA_TARGET = 0.02
+#: The analysed part of a simulated record (:func:`identify_record`) and its rows.
+ANALYSED_FLOOR = 1e-2
+TAIL_PERIODS = 10
+ROWS = 16
 
 
-def identify_record(path, mode_hz: float) -> dict:
-    """Identify the free-decay CSV ``path`` near ``mode_hz`` (Hz) as a measured record:
-    arrays ``amplitude`` (m), ``frequency_hz``, ``zeta`` (and their stds where given) and
-    the identification's notes (trimmed ends, warnings)."""
-    from ident.free_decay import identify_free_decay_file
+def identify_record(path, mode_hz: float, floor: float = ANALYSED_FLOOR,
+                    n_rows: int = ROWS) -> dict:
+    """Identify the free-decay CSV ``path`` in the band ``mode_hz`` +-30 % as a measured
+    record (:func:`ident.free_decay_table.identify_free_decay`: band-pass or modal
+    filter over the points, Hilbert track, end effects trimmed, ``n_rows`` amplitude
+    bins). A simulated record has no noise floor: it is analysed until the reference
+    point's displacement last exceeds ``floor`` times its largest value, plus
+    :data:`TAIL_PERIODS` periods (below that the record holds the other modes and
+    round-off, not the mode's decay). Returns the spec's ``table``
+    (:class:`ident.modal_data.MeasuredData`), its rows along the decay as arrays
+    ``amplitude`` (m, reference point), ``frequency_hz``, ``zeta``, ``zeta_std`` and
+    ``notes`` (what was cut and trimmed, the warnings)."""
+    from ident.free_decay_table import free_decay_table, identify_free_decay
+    from ident.time_records import TimeRecord, read_time_record
 
-    return identify_free_decay_file(path, mode_hz)
+    full = read_time_record(path)
+    x = np.abs(full.signals[:, full.reference])
+    last = int(np.flatnonzero(x >= floor * x.max())[-1])
+    end = min(full.time_s.size, last + int(TAIL_PERIODS * full.sample_rate / mode_hz) + 1)
+    record = TimeRecord(full.time_s[:end], full.signals[:end], full.points, full.quantity,
+                        full.reference, full.source)
+    band = (0.7 * mode_hz, 1.3 * mode_hz)
+    res = identify_free_decay(record, band, n_rows)
+    table = free_decay_table(record, band, n_rows, result=res)
+    order = np.argsort(table.run_order)                     # along the decay
+    return {"table": table, "amplitude": table.response_amplitude[order],
+            "frequency_hz": np.sqrt(table.omega2[order]) / (2 * np.pi),
+            "zeta": table.zeta[order], "zeta_std": table.zeta_std[order],
+            "method": "Hilbert envelope and phase (ident.free_decay)",
+            "notes": [f"analysed: the first {record.time_s[-1]:.4g} s of {full.time_s[-1]:.4g} "
+                      f"s (until the reference displacement falls below {floor:g} x its "
+                      f"largest value, + {TAIL_PERIODS} periods)", res.trim_statement,
+                      *res.warnings]}
 
 
 def compare_ringdown(case, ident: dict, start_amplitude: float, lo: float = 0.05,

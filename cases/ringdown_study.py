@@ -119,6 +119,7 @@ def _start_state(case, settings, dt):
         raise RuntimeError(f"start orbit: {exc}") from None
     state = orbit_start(model, bank, pt.harmonics, pt.q[0], float(pt.omega[0]), dt, case.n_time)
     return state, {"start": "orbit", "joint": j + 1, "slip_m": slip,
+                   "drive_amplitude_m": float(pt.dof_amplitude(case.drive_dof)[0]),
                    "frequency_hz": float(pt.frequency_hz[0]), "zeta": float(pt.zeta[0])}
 
 

@@ -102,7 +102,8 @@ def ringdown_report(case_name, settings, out: Path, window, response_levels,
     f0 = info["omega0_rad_s"] / (2 * 3.141592653589793)
     ident = identify_record(out / RECORD_FILE, f0)
     _write_identified(out / "identified.csv", ident)
-    start_amp = float(ident["amplitude"].max())
+    # the start: the orbit's drive-point amplitude, or the largest identified one
+    start_amp = float(info["start"].get("drive_amplitude_m", ident["amplitude"].max()))
     cmp = compare_ringdown(case, ident, start_amp, window[0], window[1], response_levels,
                            progress=progress, store=out)
     report = {"case": case.name, "mode": settings.mode, "record": info,
