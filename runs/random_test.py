@@ -62,11 +62,14 @@ def band_limited_noise(n: int, dt: float, band_hz, rms: float, seed: int) -> np.
     lo, hi = band_hz
     if not 0 <= lo < hi < 0.5 / dt:
         raise ValueError(f"band {band_hz} Hz must lie within 0..{0.5 / dt:.4g} Hz (Nyquist)")
-    x = np.random.default_rng(int(seed)).standard_normal(int(n))
+    from scipy.fft import next_fast_len
+
+    m = next_fast_len(int(n), real=True)       # an FFT size with small factors
+    x = np.random.default_rng(int(seed)).standard_normal(m)
     X = np.fft.rfft(x)
-    f = np.fft.rfftfreq(int(n), dt)
+    f = np.fft.rfftfreq(m, dt)
     X[(f < lo) | (f > hi)] = 0.0
-    y = np.fft.irfft(X, int(n))
+    y = np.fft.irfft(X, m)[:int(n)]
     return y * (float(rms) / np.sqrt(np.mean(y * y)))
 
 
