@@ -43,7 +43,7 @@ def identify_record(path, mode_hz: float, floor: float = ANALYSED_FLOOR,
     record (:func:`ident.free_decay_table.identify_free_decay`: band-pass or modal
     filter over the points, Hilbert track, end effects trimmed, ``n_rows`` amplitude
     bins). A simulated record has no noise floor: it is analysed until the reference
-    point's displacement last exceeds ``floor`` times its largest value, plus
+    point's displacement in the band last exceeds ``floor`` times its largest value, plus
     :data:`TAIL_PERIODS` periods (below that the record holds the other modes and
     round-off, not the mode's decay). Returns the spec's ``table``
     (:class:`ident.modal_data.MeasuredData`), its rows along the decay as arrays
@@ -52,13 +52,16 @@ def identify_record(path, mode_hz: float, floor: float = ANALYSED_FLOOR,
     from ident.free_decay_table import free_decay_table, identify_free_decay
     from ident.time_records import TimeRecord, read_time_record
 
+    from scipy import signal
+
     full = read_time_record(path)
-    x = np.abs(full.signals[:, full.reference])
+    band = (0.7 * mode_hz, 1.3 * mode_hz)
+    sos = signal.butter(4, band, btype="bandpass", fs=full.sample_rate, output="sos")
+    x = np.abs(signal.sosfiltfilt(sos, full.signals[:, full.reference]))   # the mode's band
     last = int(np.flatnonzero(x >= floor * x.max())[-1])
     end = min(full.time_s.size, last + int(TAIL_PERIODS * full.sample_rate / mode_hz) + 1)
     record = TimeRecord(full.time_s[:end], full.signals[:end], full.points, full.quantity,
                         full.reference, full.source)
-    band = (0.7 * mode_hz, 1.3 * mode_hz)
     res = identify_free_decay(record, band, n_rows)
     table = free_decay_table(record, band, n_rows, result=res)
     order = np.argsort(table.run_order)                     # along the decay
@@ -67,8 +70,9 @@ def identify_record(path, mode_hz: float, floor: float = ANALYSED_FLOOR,
             "zeta": table.zeta[order], "zeta_std": table.zeta_std[order],
             "method": "Hilbert envelope and phase (ident.free_decay)",
             "notes": [f"analysed: the first {record.time_s[-1]:.4g} s of {full.time_s[-1]:.4g} "
-                      f"s (until the reference displacement falls below {floor:g} x its "
-                      f"largest value, + {TAIL_PERIODS} periods)", res.trim_statement,
+                      f"s (until the reference displacement in the band falls below "
+                      f"{floor:g} x its largest value, + {TAIL_PERIODS} periods)",
+                      res.trim_statement,
                       *res.warnings]}
 
 

@@ -22,8 +22,10 @@ apart, so that a linear mode at ``w0`` rings at exactly ``w0`` in the record (th
 trapezoidal rule is the bilinear transform ``s = (2/dt) tanh(s_d dt/2)``: a mode ringing
 at ``w`` near ``w0`` appears at ``w0 + (w - w0) sin(2 pi/n)/(2 pi/n)``, a relative
 frequency error ``|w/w0 - 1| (2 pi/n)^2/6``, and its damping ratio is multiplied by
-``sin(2 pi/n)/(2 pi/n)``, a relative error ``(2 pi/n)^2/6``: 1.6e-3 at ``n = 64``). The joints (Jenkins banks) are rate independent, so the warped
-time axis changes nothing in them.
+``sin(2 pi/n)/(2 pi/n)``, a relative error ``(2 pi/n)^2/6``: 1.6e-3 at ``n = 64``).
+The joints (Jenkins banks) are rate independent, so the warped time axis changes
+nothing in them. An impulse excites every mode, the higher ones resolved by few steps:
+its energy residual is larger (2e-2 on the double beam at 64 steps per period of mode 4).
 
 Energy balance (:class:`fe.newmark.EnergyBalance`, summed over the chunks of the
 integration): with no load, ``0 = viscous + joint dissipation + change of kinetic,
