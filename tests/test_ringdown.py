@@ -115,6 +115,38 @@ def test_orbit_start_decays_like_the_backbone_sdof():
     assert np.abs(dz).max() < 0.02
 
 
+def test_sdof_decay_identified_like_a_measured_record():
+    """The same SDOF decay (64 steps per period) through ident.free_decay (Hilbert,
+    end effects trimmed): every row between 5 % and 80 % of the start against EPMC."""
+    from ident.free_decay_table import identify_free_decay
+    from ident.time_records import TimeRecord
+    from fe.epmc import epmc_backbone
+
+    p, model, bank = iwan_sdof()
+    w0, n = model.omega[0], 64
+    dt, _ = warped_step(w0, n)
+    joints = BankHarmonics(bank, (1, 3, 5, 7), 256)
+    a0 = 0.8 * p.phi_max
+    pt = solve_epmc(model, joints, 1, a0)
+    rec = ring_down(model, bank, orbit_start(model, bank, pt.harmonics, pt.q[0],
+                                             pt.omega[0], dt), w0, 150, np.eye(1),
+                    steps_per_period=n)
+    x = rec.response[:, 0]
+    end = np.flatnonzero(np.abs(x) >= 0.01 * np.abs(x).max())[-1] + 10 * n
+    f0 = w0 / (2 * np.pi)
+    res = identify_free_decay(TimeRecord(rec.time_s[:end], x[:end, None], ["1"]),
+                              (0.7 * f0, 1.3 * f0), 16)
+    h, start = res.hilbert, pt.dof_amplitude(0)[0]
+    win = (h.amplitude > 0.05 * start) & (h.amplitude < 0.8 * start)
+    assert win.sum() >= 10 and h.amplitude[win].min() < 0.07 * start
+    ref = epmc_backbone(model, joints, 1, np.geomspace(0.04 * a0, 0.85 * a0, 30)).at(
+        h.amplitude[win])
+    assert np.abs(h.frequency_hz[win] / (np.sqrt(ref["omega2"]) / (2 * np.pi)) - 1).max() < 1e-4
+    assert np.abs(h.zeta[win] / ref["zeta"] - 1).max() < 0.02
+    # the joint carries most of the damping here: the test is not the dashpot's
+    assert ref["zeta"].max() > 2 * 0.002
+
+
 @pytest.fixture(scope="module")
 def double_beam_mode4():
     from cases.ringdown_study import ringdown_case
