@@ -78,3 +78,29 @@ def test_joint_equivalent_of_a_spring_and_dashpot():
     kk, cc = joint_equivalent(S, Gh, [1], w)
     np.testing.assert_allclose(kk, [5e3, 0.0])
     np.testing.assert_allclose(cc, [2.0, 0.0])
+
+
+def test_campaign_with_the_period_newton_step_reaches_the_same_steady_state_sooner():
+    """A jointed SDOF driven through its resonance (micro-slip, lightly damped) by the
+    Newmark protocol from the harmonic-balance orbits, with and without the step."""
+    import dataclasses
+
+    from cases.random_series import sdof_iwan
+    from fe.harmonic_balance import HBSettings
+    from joints.iwan import IwanParameters
+    from runs.campaign import Campaign, NewmarkProtocol
+    from runs.stepped_sine import run_level
+
+    joint = IwanParameters(chi=-0.5, K_T=1e5, F_S=100.0, beta=0.5)
+    model, bank = sdof_iwan(joint, 9e5, 1.0, 0.002)
+    f0 = model.omega[0] / (2 * np.pi)
+    lines = f0 * np.array([0.99, 0.995, 0.998, 1.0, 1.002])
+    F = 0.1 * joint.phi_max * 2 * 0.003 * model.K[0, 0]
+    plain = NewmarkProtocol(steps_per_period=128, tol=1e-8, hb_start=HBSettings())
+    runs = {}
+    for on in (False, True):
+        camp = Campaign(lines, [F], np.ones(1), [0],
+                        dataclasses.replace(plain, period_newton=on))
+        runs[on] = run_level(model, bank, camp, 0)
+    np.testing.assert_allclose(runs[True].receptance, runs[False].receptance, rtol=1e-6)
+    assert runs[True].work.sum() < 0.3 * runs[False].work.sum()
