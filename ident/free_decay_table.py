@@ -106,7 +106,7 @@ def identify_free_decay(record, band=None, n_rows: int = DEFAULT_ROWS) -> FreeDe
         warnings.append(short)
     if not bins:
         raise InputError(f"{where}: {short or 'no amplitude bin above the noise'}")
-    h, p = decay_rows(iso, bins)
+    h, p = decay_rows(iso, bins, noise)
     snr = decay_checks.snr_db(h.amplitude, noise)
     rows = []
     for k in range(len(bins)):

@@ -17,11 +17,13 @@ absolute value (and so R).
 
 Signature (:func:`random_signature`): a level not stated as random whose FRF looks
 averaged. A ``coherence`` column belongs to an averaged (random) estimate; otherwise
-the line-to-line noise is measured by the fourth difference along frequency (the FRF
-itself contributes ``(df / half-power width)^4``) and regressed on ``|H|`` in log-log:
-a stepped sine measures each line on its own, its noise follows the response
-(slope near 1); the noise of an H1 estimate from output noise or nonlinear distortion
-averaged over the record is near-uniform across lines (slope near 0).
+the line-to-line noise is the fourth difference along frequency of the FRF less the
+identified modes (what is left is smooth but for the noise) and is regressed on
+``|H|`` in log-log: a stepped sine measures each line on its own and its noise follows
+the response (slope near 1, as in the project's synthetic series); the noise of an H1
+estimate from output noise averaged over a record is near-uniform across lines
+(slope near 0). A stepped sine with a constant noise floor looks the same: the line
+says "looks", and the test type in the file settles it.
 """
 from __future__ import annotations
 
@@ -54,13 +56,21 @@ def mode_response_rms(mode, point: int, quantity: str, freq_hz, drive_rms: float
     return float(drive_rms * np.sqrt((near + far) / (f[-1] - f[0])))
 
 
-def random_signature(freq_hz, frf, coherence=None) -> str | None:
+def random_signature(freq_hz, frf, modes=(), quantity="receptance",
+                     coherence=None) -> str | None:
     """One line if an FRF set looks like an averaged random estimate (module doc), else
-    None. ``frf``: (n_lines, n_points) complex; ``coherence``: any column of them."""
+    None. ``frf``: (n_lines, n_points) complex; ``modes``: identified modes (``pole``,
+    ``shape``) subtracted first; ``coherence``: any column of them."""
     if coherence is not None:
         return "the file has a coherence column: an averaged (random-excitation) FRF"
-    h = np.abs(np.asarray(frf))
-    d4 = np.abs(np.diff(np.asarray(frf), 4, axis=0)) / np.sqrt(70.0)
+    f = np.asarray(freq_hz, float)
+    frf = np.asarray(frf).reshape(f.size, -1)
+    h = np.abs(frf)
+    rest = frf.astype(complex)
+    for m in modes:
+        rest = rest - modal_receptance(m.pole, m.shape, f) * (2j * np.pi * f[:, None]) \
+            ** _POWER[quantity]
+    d4 = np.abs(np.diff(rest, 4, axis=0)) / np.sqrt(70.0)
     if d4.shape[0] < 16:
         return None
     mag = h[2:-2]
