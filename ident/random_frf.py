@@ -28,11 +28,10 @@ says "looks", and the test type in the file settles it.
 from __future__ import annotations
 
 import numpy as np
-from scipy import integrate
-
 from ident.poles import modal_receptance
 
 _POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
+GAUSS_NODES = 1000
 #: Below this log-log slope of the line noise on |H| the noise is called uniform.
 UNIFORM_NOISE_SLOPE = 0.5
 #: Fourth-difference noise over |H| needed in the top lines for the slope to mean anything.
@@ -44,16 +43,23 @@ def mode_response_rms(mode, point: int, quantity: str, freq_hz, drive_rms: float
     ``drive_rms`` flat over ``freq_hz`` (module doc), in the FRF's response unit."""
     f = np.asarray(freq_hz, float)
     shape = np.atleast_1d(mode.shape)[point]
-    power = _POWER[quantity]
+    fd = mode.pole.imag / (2 * np.pi)
+    hw = -mode.pole.real / (2 * np.pi)          # half-power half width, Hz
 
     def h2(fr):
-        h = modal_receptance(mode.pole, shape, fr)[0, 0] * (2 * np.pi * fr) ** power
-        return abs(h) ** 2
+        h = modal_receptance(mode.pole, shape, fr)[:, 0] * (2 * np.pi * fr) ** _POWER[quantity]
+        return np.abs(h) ** 2
 
-    fd = mode.pole.imag / (2 * np.pi)
-    near = integrate.quad(h2, 0.0, 2 * fd, points=[fd], limit=400, epsrel=1e-10)[0]
-    far = integrate.quad(h2, 2 * fd, np.inf, limit=400, epsrel=1e-10)[0]
-    return float(drive_rms * np.sqrt((near + far) / (f[-1] - f[0])))
+    # Gauss-Legendre: above fd/2 in th with f = fd + hw tan(th), which spreads the
+    # resonance peak evenly (an adaptive rule over f misses a narrow peak by percent;
+    # 1000 nodes give 1e-14 on the closed form of tests/test_random_series.py), below
+    # fd/2 in f, where |H| is smooth
+    x, w = np.polynomial.legendre.leggauss(GAUSS_NODES)
+    a, b = np.arctan(-0.5 * fd / hw), np.pi / 2
+    th = 0.5 * (b - a) * x + 0.5 * (b + a)
+    peak = 0.5 * (b - a) * np.sum(w * h2(fd + hw * np.tan(th)) * hw / np.cos(th) ** 2)
+    low = 0.25 * fd * np.sum(w * h2(0.25 * fd * (x + 1)))
+    return float(drive_rms * np.sqrt((peak + low) / (f[-1] - f[0])))
 
 
 def random_signature(freq_hz, frf, modes=(), quantity="receptance",
@@ -75,6 +81,8 @@ def random_signature(freq_hz, frf, modes=(), quantity="receptance",
         return None
     mag = h[2:-2]
     keep = (mag > 0) & (d4 > 0)
+    if keep.sum() < 16:
+        return None
     x, y = np.log(mag[keep]), np.log(d4[keep])
     if np.median(d4[keep] / mag[keep]) < MIN_NOISE or np.ptp(x) < np.log(10.0):
         return None

@@ -21,7 +21,7 @@ from inverse.diagnose import diagnose
 from inverse.estimate import estimate
 from joints.describing import describing_function
 from joints.iwan import IwanParameters
-from tests.decay_synth import iwan_sdof_decay, linear_decay
+from decay_synth import iwan_sdof_decay, linear_decay
 
 #: Damping at the start of the simulated decay. The describing-function backbone is the
 #: first-order averaging result (steady loops); along a decay the loops are not steady,
