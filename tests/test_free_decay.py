@@ -123,7 +123,13 @@ def test_clipped_noisy_and_short_records_are_named():
     f0, zeta = 25.0, 0.005
     t, x = linear_decay(f0, zeta, 1.0, 40 * f0, np.log(1 / 0.01) / (zeta * 2 * np.pi * f0))
     clipped = free_decay_table(TimeRecord(t, np.clip(x, -0.7, 0.7), ["1"]))
-    assert any("clipped" in w for w in clipped.warnings)
+    assert sum("clipped" in w and "flat tops" in w for w in clipped.warnings) == 1
+    tl, xl = linear_decay(f0, 0.001, 1.0, 40 * f0, 300 / f0)     # clipped over 35 cycles,
+    noise = 0.01 * np.random.default_rng(2).standard_normal(xl.size)   # noise on the tops
+    assert any("below the mode's envelope" in w for w in free_decay_table(
+        TimeRecord(tl, np.clip(xl, -0.8, 0.8) + noise, ["1"])).warnings)
+    assert not any("clipped" in w for w in free_decay_table(
+        TimeRecord(tl, xl + noise, ["1"])).warnings)
     noisy = free_decay_table(TimeRecord(t, x + 0.03 * np.random.default_rng(1)
                                         .standard_normal(x.size), ["1"]))
     assert any("noise floor" in w for w in noisy.warnings)
