@@ -34,7 +34,9 @@
    dependent one the first-order averaging result ``da/dt = -zeta omega a`` of the
    EPMC backbone), amplitude ``exp(ln a)`` there. Standard uncertainties: least-squares
    standard errors, inflated by ``sqrt(n / n_eff)`` with ``n_eff`` the half cycles in the
-   bin (the smoothed track is correlated within a half cycle).
+   bin (the smoothed track is correlated within a half cycle) or, if fewer, the
+   samples over the residuals' correlation length; never below the standard error the
+   record's in-band noise level gives (:func:`noise_slope_std`).
 SI units: s, Hz, rad/s; amplitudes in the record's quantity.
 """
 from __future__ import annotations
@@ -208,25 +210,54 @@ def peak_track(iso: Isolated):
     return t[k] + off * dt, np.log(np.abs(peak)), tz, np.pi * np.arange(tz.size)
 
 
+def correlation_length(res) -> float:
+    """Integrated autocorrelation time of residuals, in samples: ``1 + 2 sum rho_k``
+    over the lags before the first negative autocorrelation (>= 1)."""
+    r = res - res.mean()
+    n = r.size
+    acf = np.fft.irfft(np.abs(np.fft.rfft(r, 2 * n)) ** 2)[:n]
+    if acf[0] <= 0:
+        return 1.0
+    rho = acf / acf[0]
+    neg = np.flatnonzero(rho < 0)
+    stop = neg[0] if neg.size else n
+    return max(1.0, 1.0 + 2.0 * float(np.sum(rho[1:stop])))
+
+
 def _slope_at_centre(t, v, tc, n_eff):
     """Slope of a quadratic least-squares fit at ``tc`` and its standard error,
-    inflated by ``sqrt(n / n_eff)``; also the fitted value at ``tc``."""
+    inflated by ``sqrt(n / n_eff)`` with ``n_eff`` the smaller of the given one and
+    ``n`` over the residuals' correlation length; also the fitted value at ``tc``."""
     X = np.column_stack([np.ones_like(t), t - tc, (t - tc) ** 2])
     coef, *_ = np.linalg.lstsq(X, v, rcond=None)
     res = v - X @ coef
     dof = max(t.size - 3, 1)
-    cov = np.linalg.inv(X.T @ X) * (res @ res) / dof * max(t.size / max(n_eff, 1.0), 1.0)
+    n_eff = max(min(n_eff, t.size / correlation_length(res)), 1.0)
+    cov = np.linalg.inv(X.T @ X) * (res @ res) / dof * max(t.size / n_eff, 1.0)
     return coef[1], np.sqrt(cov[1, 1]), coef[0]
 
 
-def _row(t_a, ln_a, t_th, theta, t0, t1, n_eff_a, n_eff_th):
+def noise_slope_std(t, ln_a, tc, noise_psd) -> float:
+    """Standard error of a least-squares slope of ``ln a`` or ``theta`` over ``t`` (s)
+    at ``tc`` from additive white noise of two-sided PSD ``noise_psd`` (per Hz) in the
+    band: each of the noise's in-phase and quadrature parts, over the envelope ``a``,
+    perturbs ``ln a`` and ``theta`` with that PSD at low frequency, so
+    ``var = N0 int tau^2 / a^2 dt / (int tau^2 dt)^2`` (``tau = t - tc``)."""
+    dt = t[1] - t[0]
+    tau2 = (t - tc) ** 2
+    return float(np.sqrt(noise_psd * np.sum(tau2 * np.exp(-2 * ln_a)) * dt)
+                 / (np.sum(tau2) * dt))
+
+
+def _row(t_a, ln_a, t_th, theta, t0, t1, n_eff, floor):
     tc = 0.5 * (t0 + t1)
     ia = (t_a >= t0) & (t_a <= t1)
     it = (t_th >= t0) & (t_th <= t1)
     if ia.sum() < 4 or it.sum() < 4:
         return None
-    w, sw, _ = _slope_at_centre(t_th[it], theta[it], tc, n_eff_th(it.sum()))
-    s, ss, la = _slope_at_centre(t_a[ia], ln_a[ia], tc, n_eff_a(ia.sum()))
+    w, sw, _ = _slope_at_centre(t_th[it], theta[it], tc, n_eff(it.sum()))
+    s, ss, la = _slope_at_centre(t_a[ia], ln_a[ia], tc, n_eff(ia.sum()))
+    sw, ss = max(sw, floor(tc, t0, t1)), max(ss, floor(tc, t0, t1))
     sigma = -s
     om2 = w * w + sigma * sigma
     om2_std = np.hypot(2 * w * sw, 2 * sigma * ss)
@@ -253,14 +284,22 @@ def decay_bins(t, ln_a, n_rows=DEFAULT_ROWS, floor=0.0, period_s=0.0):
     return bins
 
 
-def decay_rows(iso: Isolated, bins) -> tuple[DecayTrack, DecayTrack]:
-    """Both methods' rows in the given time bins (module doc, 5)."""
+def decay_rows(iso: Isolated, bins, noise_var=None) -> tuple[DecayTrack, DecayTrack]:
+    """Both methods' rows in the given time bins (module doc, 5); ``noise_var``: the
+    in-band noise variance (:func:`ident.decay_checks.noise_variance_in_band`), which
+    sets a floor under the slopes' standard errors (:func:`noise_slope_std`)."""
     t, ln_a, theta, half = hilbert_track(iso)
     tp, lnp, tz, thz = peak_track(iso)
+    psd = (noise_var or 0.0) / (iso.band_hz[1] - iso.band_hz[0])
+
+    def floor(tc, t0, t1):
+        i = (t >= t0) & (t <= t1)
+        return noise_slope_std(t[i], ln_a[i], tc, psd) if psd > 0 and i.sum() > 2 else 0.0
+
     out = []
-    for name, args in (("hilbert", (t, ln_a, t, theta, lambda n: n / half, lambda n: n / half)),
-                       ("peaks", (tp, lnp, tz, thz, lambda n: n, lambda n: n))):
-        rows = [_row(*args[:4], t0, t1, *args[4:]) for t0, t1 in bins]
+    for name, args in (("hilbert", (t, ln_a, t, theta, lambda n: n / half)),
+                       ("peaks", (tp, lnp, tz, thz, lambda n: n))):
+        rows = [_row(*args[:4], t0, t1, args[4], floor) for t0, t1 in bins]
         rows = [r if r is not None else (np.nan,) * 6 for r in rows]
         cols = np.array(rows, float).reshape(-1, 6).T
         cycles = np.array([(t1 - t0) * iso.frequency_hz for t0, t1 in bins])

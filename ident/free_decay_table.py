@@ -88,7 +88,9 @@ def identify_free_decay(record, band=None, n_rows: int = DEFAULT_ROWS) -> FreeDe
         iso = isolate_mode(record.time_s, record.signals, band, record.reference)
     except ValueError as exc:
         raise InputError(f"{where}: {exc}") from None
-    warnings = decay_checks.clipping(record.signals, record.points)
+    warnings = decay_checks.clipping(record.time_s, record.signals, record.points, iso.sos, [
+        decay_checks.broadband_noise_rms(record.time_s, x, iso.band_hz)
+        for x in record.signals.T])
     ref_raw = record.signals[:, record.reference]
     noise = decay_checks.noise_variance_in_band(record.time_s, ref_raw, iso.band_hz)
     t, ln_a, _, _ = hilbert_track(iso)
@@ -106,7 +108,7 @@ def identify_free_decay(record, band=None, n_rows: int = DEFAULT_ROWS) -> FreeDe
         warnings.append(short)
     if not bins:
         raise InputError(f"{where}: {short or 'no amplitude bin above the noise'}")
-    h, p = decay_rows(iso, bins)
+    h, p = decay_rows(iso, bins, noise)
     snr = decay_checks.snr_db(h.amplitude, noise)
     rows = []
     for k in range(len(bins)):

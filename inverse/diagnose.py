@@ -248,9 +248,11 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         sep = {"inseparable": [], "untestable": {k: v for k, v in unavailable.items()
                                                  if "+" not in k},
                "note": f"not analysed: {cause} is named without a rival on {obs.n} levels"}
-    return assemble(
+    report = assemble(
         obs=obs, d=d, raw=raw, fits=fits, params=params, weight=weight, ic=ic,
         tests=tests, cv=cv, held=held, n_top=n_top(obs.n), noise=noise,
         unavailable=unavailable, contradictions=found, refuted=bool(refuted),
         cause=cause, also=also, best=best, rivals=rivals, separability=sep,
         warnings=warnings, t_cause=T_CAUSE, w_ambiguous=W_AMBIGUOUS)
+    report["test"] = str(d.test[0])
+    return report
