@@ -51,7 +51,7 @@ def _drive_rms(joint, slip_rms, band_width):
 
 @pytest.fixture(scope="module")
 def random_series(seeded_joint, tmp_path_factory):
-    """Five random levels of the seeded joint (slip RMS 0.6 % to 9 % of phi_max),
+    """Five random levels of the seeded joint (slip RMS 0.4 % to 5.5 % of phi_max),
     simulated and identified from their FRF files as a measured series."""
     from ident.series import load_series
 
@@ -84,7 +84,7 @@ def test_random_series_recovers_chi_and_agrees_with_the_rayleigh_model(seeded_jo
     pred = sdof_rayleigh_prediction(joint, K_LIN, MASS, float(model.C[0, 0]), slip)
     idx = np.array([0, 2, 4])
     assert np.abs(np.sqrt(data.omega2[idx] / pred["omega2"]) - 1).max() < 2e-4
-    assert np.abs(data.zeta[idx] / pred["zeta"] - 1).max() < 0.03
+    assert np.abs(data.zeta[idx] / pred["zeta"] - 1).max() < 0.01
     # the joint's share of the damping is seen, not only the dashpot's
     assert data.zeta[-1] - data.zeta[0] > 0.5 * (pred["zeta"][-1] - pred["zeta"][0])
 
