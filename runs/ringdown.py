@@ -36,7 +36,7 @@ SI units: s, m, N, J.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -73,7 +73,6 @@ class FreeDecayRecord:
     omega0: float
     start: str
     newton_iterations: int = 0
-    notes: list = field(default_factory=list)
 
 
 def orbit_start(model: ReducedModel, bank: JointBank, harmonics, q_harmonics, omega: float,
