@@ -170,9 +170,11 @@ def report_lines(rep: dict) -> list[str]:
            f"{e['kinetic_change'] + e['strain_change'] + e['joint_stored_change']:.5g}; "
            f"relative residual {e['relative_residual']:.2e}"]
     w = c["window"]
+    over = [r["over_start"] for r in c["rows"]]
     out.append(f"  compared window: {w['lo']:g}..{w['hi']:g} x the start amplitude "
-               f"{w['start_amplitude_m']:.4g} m ({w['rows_in_window']} rows; "
-               f"{w['rows_outside']} identified rows outside it not compared)")
+               f"{w['start_amplitude_m']:.4g} m: {w['rows_in_window']} rows at "
+               f"{min(over):.3g}..{max(over):.3g} x start (above that: the trimmed start); "
+               f"{w['rows_outside']} identified rows outside the window not compared")
     for note in rep["identification"].get("notes", []):
         out.append(f"  identification: {note}")
     out += comparison_rows(c)
