@@ -5,7 +5,8 @@
 reduced model with its joints (:mod:`cases.ringdown_study`), writes the record as a
 free-decay CSV, identifies it (:mod:`ident.free_decay`) and compares frequency and
 damping against amplitude with the EPMC backbone and the response-controlled virtual
-test (:mod:`cases.ringdown_routes`). Files in ``--out``: ``free_decay.csv`` (appended
+test (:mod:`cases.ringdown_routes`; all of it :func:`cases.ringdown_report.ringdown_report`).
+Files in ``--out``: ``free_decay.csv`` (appended
 while integrating), ``record.json`` (start, energy balance), ``identified.csv`` (the
 measured-data rows of the decay), ``comparison.json`` and ``ringdown.png``; a rerun with
 the same inputs reuses the complete record and the stored virtual test.
@@ -13,12 +14,11 @@ the same inputs reuses the complete record and the stored virtual test.
 from __future__ import annotations
 
 import argparse
-import time
-from pathlib import Path
+import math
 
 from cases.registry import NONLINEAR_CASES
 from cli import validate
-from runs.jsonio import print_json, to_jsonable
+from runs.jsonio import print_json
 
 NAME = "ringdown"
 
@@ -59,6 +59,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    from cases.ringdown_report import ringdown_report
     from cases.ringdown_study import RingdownSettings
 
     lo, hi = args.window
@@ -80,76 +81,6 @@ def run(args) -> int:
     return 0
 
 
-def ringdown_report(case_name, settings, out: Path, window, response_levels,
-                    progress=True) -> dict:
-    """Simulate, identify, compare and write the files (module docstring)."""
-    import json
-
-    from cases.ringdown_routes import compare_ringdown, identify_record
-    from cases.ringdown_study import RECORD_FILE, ringdown_case, simulate_ringdown
-
-    t0 = time.perf_counter()
-    case = ringdown_case(case_name, settings.mode)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=settings.cycles, unit="cycle", desc="ring-down", leave=False)
-    try:
-        rec, info = simulate_ringdown(case, settings, out, progress=bar)
-    finally:
-        if bar is not None:
-            bar.close()
-    f0 = info["omega0_rad_s"] / (2 * 3.141592653589793)
-    ident = identify_record(out / RECORD_FILE, f0)
-    _write_identified(out / "identified.csv", ident)
-    # the start: the orbit's drive-point amplitude, or the largest identified one
-    start_amp = float(info["start"].get("drive_amplitude_m", ident["amplitude"].max()))
-    cmp = compare_ringdown(case, ident, start_amp, window[0], window[1], response_levels,
-                           progress=progress, store=out)
-    report = {"case": case.name, "mode": settings.mode, "record": info,
-              "identification": {k: ident[k] for k in ("method", "notes", "trimmed")
-                                 if k in ident},
-              "comparison": cmp, "files": [str(out / RECORD_FILE), str(out / "record.json"),
-                                           str(out / "identified.csv"),
-                                           str(out / "comparison.json"),
-                                           str(out / "ringdown.png")]}
-    _plot(out / "ringdown.png", case, ident, cmp, start_amp)
-    report["elapsed_s"] = time.perf_counter() - t0
-    tmp = out / "comparison.tmp"
-    tmp.write_text(json.dumps(to_jsonable(report), indent=1))
-    tmp.replace(out / "comparison.json")
-    return report
-
-
-def _write_identified(path: Path, ident: dict) -> None:
-    from ident.measured import write_measured
-
-    write_measured(path, ident["table"])
-
-
-def _plot(path, case, ident, cmp, start_amp) -> None:
-    from viz.backbone_plot import plot_backbones
-
-    bb = cmp["backbone"]
-    curves = [{"label": "EPMC backbone (bank path)", "style": "-",
-               "amplitude": bb["amplitude_m"], "frequency_hz": bb["frequency_hz"],
-               "zeta": bb["zeta"]},
-              {"label": "ring-down, identified", "style": ".",
-               "amplitude": ident["amplitude"], "frequency_hz": ident["frequency_hz"],
-               "zeta": ident["zeta"]}]
-    if cmp["response"]:
-        r = cmp["response"]
-        curves.append({"label": "response-controlled test (LSCF)", "style": "o",
-                       "amplitude": [x["amplitude_m"] for x in r],
-                       "frequency_hz": [x["frequency_hz"] for x in r],
-                       "zeta": [x["zeta"] for x in r]})
-    w = cmp["window"]
-    plot_backbones(curves, xlabel="drive-point amplitude (m)", path=path,
-                   title=f"{case.name}, mode {case.mode}: ring-down vs backbone",
-                   marks=[(w["lo"] * start_amp, f"{w['lo']:g} x start"),
-                          (w["hi"] * start_amp, f"{w['hi']:g} x start")])
-
-
 def report_lines(rep: dict) -> list[str]:
     """The report as text."""
     from cases.ringdown_routes import comparison_rows
@@ -162,7 +93,7 @@ def report_lines(rep: dict) -> list[str]:
              f"impulse {s['impulse_Ns']:.4g} N s at the drive point")
     out = [f"{rep['case']}, mode {rep['mode']}: simulated free decay, {start}",
            f"  {r['samples']} samples, {r['settings']['steps_per_period']} steps per period of "
-           f"{r['omega0_rad_s'] / 6.283185307179586:.4f} Hz (time axis pre-warped), "
+           f"{r['omega0_rad_s'] / (2 * math.pi):.4f} Hz (time axis pre-warped), "
            f"integration {r['integration_s']:.2f} s" + (" (stored record reused)"
                                                         if r.get("loaded") else ""),
            f"  energy balance (J, computed): viscous {e['viscous']:.5g}, joint dissipation "
