@@ -144,12 +144,16 @@ def isolate_mode(time_s, x, band_hz=None, reference=0) -> Isolated:
     t = np.asarray(time_s, float)
     x = np.atleast_2d(np.asarray(x, float).T).T
     fs = (t.size - 1) / (t[-1] - t[0])
-    f_pk = dominant_frequency(t, x) if band_hz is None else float(np.mean(band_hz))
-    band = (f_pk * (1 - BAND_HALF_WIDTH), min(f_pk * (1 + BAND_HALF_WIDTH), 0.45 * fs)) \
-        if band_hz is None else tuple(map(float, band_hz))
+    if band_hz is None:
+        f_pk = dominant_frequency(t, x)
+        band = (f_pk * (1 - BAND_HALF_WIDTH), min(f_pk * (1 + BAND_HALF_WIDTH), 0.45 * fs))
+    else:
+        band = tuple(map(float, band_hz))
     sos = band_pass(band, fs)
     notes, shape = [], None
     y_all = signal.sosfiltfilt(sos, x, axis=0)
+    if band_hz is not None:
+        f_pk = dominant_frequency(t, y_all)         # the mode in the given band
     if x.shape[1] > 1:                          # modal filter
         _, _, vt = np.linalg.svd(y_all, full_matrices=False)
         shape = vt[0] * np.sign(vt[0, reference] or 1.0)

@@ -22,7 +22,8 @@ stepped-sine series")::
   for every response point ``P``, the pair ``re_P`` / ``im_P`` (real and imaginary part
   of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
   a comma; points keep the order of their ``re_`` columns. One optional ``force``
-  column: the measured force amplitude at the reference on that line (N, > 0). No
+  column: the measured force amplitude at the reference on that line (N, > 0); one
+  optional ``coherence`` column (0..1, of an averaged estimate: a random test). No
   other columns.
 
 Errors are :class:`ident.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
@@ -81,6 +82,7 @@ class FRFSet:
     run_order : chronological order of the level (int >= 1) or None.
     force : (n,) measured force amplitude at the reference per line (N) or None.
     test : "stepped-sine", "random" or None (not stated: stepped sine).
+    coherence : (n,) ordinary coherence at the drive point per line, or None.
     """
 
     freq_hz: np.ndarray
@@ -94,6 +96,7 @@ class FRFSet:
     run_order: int | None = None
     force: np.ndarray | None = None
     test: str | None = None
+    coherence: np.ndarray | None = None
 
     def __post_init__(self):
         self.freq_hz = np.asarray(self.freq_hz, float)
@@ -111,11 +114,13 @@ class FRFSet:
             raise ValueError(f"test must be one of {', '.join(FRF_TESTS)}, got {self.test!r}")
         if self.control is not None and self.control not in CONTROLS:
             raise ValueError(f"control must be force or response, got {self.control!r}")
-        if self.force is not None:
-            self.force = np.asarray(self.force, float)
-            if self.force.shape != self.freq_hz.shape:
-                raise ValueError(f"force has shape {self.force.shape}, one value per "
-                                 f"frequency ({self.freq_hz.size}) is needed")
+        for name in ("force", "coherence"):
+            v = getattr(self, name)
+            if v is not None:
+                setattr(self, name, np.asarray(v, float))
+                if getattr(self, name).shape != self.freq_hz.shape:
+                    raise ValueError(f"{name} has shape {np.shape(v)}, one value per "
+                                     f"frequency ({self.freq_hz.size}) is needed")
 
 
 def _fail(source, line, column, message):
@@ -153,17 +158,17 @@ def read_frf_csv(path) -> FRFSet:
         _fail(src, 1, 1, "empty file: expected a header line")
     if header[0] != "freq_hz":
         _fail(src, header_line, header[0] or 1, "first column must be 'freq_hz'")
-    points, re_col, im_col, force_col = [], {}, {}, None
+    points, re_col, im_col, extra_col = [], {}, {}, {}
     for j, name in enumerate(header[1:], start=1):
-        if name == "force":
-            if force_col is not None:
+        if name in ("force", "coherence"):
+            if name in extra_col:
                 _fail(src, header_line, name, "duplicate column name")
-            force_col = j
+            extra_col[name] = j
             continue
         part, _, label = name.partition("_")
         if part not in ("re", "im") or not label:
             _fail(src, header_line, name,
-                  "unknown column: expected re_<point>, im_<point> or force")
+                  "unknown column: expected re_<point>, im_<point>, force or coherence")
         target = re_col if part == "re" else im_col
         if label in target:
             _fail(src, header_line, name, "duplicate column name")
@@ -202,9 +207,15 @@ def read_frf_csv(path) -> FRFSet:
     if bad.size:
         _fail(src, lines[bad[0] + 1], "freq_hz", "frequencies must be strictly increasing")
     frf = values[:, [re_col[p] for p in points]] + 1j * values[:, [im_col[p] for p in points]]
-    force = None
-    if force_col is not None:
-        force = values[:, force_col]
+    force = coherence = None
+    if "coherence" in extra_col:
+        coherence = values[:, extra_col["coherence"]]
+        bad = np.flatnonzero((coherence < 0) | (coherence > 1))
+        if bad.size:
+            _fail(src, lines[bad[0]], "coherence",
+                  f"coherence must be in [0, 1], got {coherence[bad[0]]:g}")
+    if "force" in extra_col:
+        force = values[:, extra_col["force"]]
         bad = np.flatnonzero(force <= 0)
         if bad.size:
             _fail(src, lines[bad[0]], "force", f"force must be > 0 N, got {force[bad[0]]:g}")
@@ -228,7 +239,7 @@ def read_frf_csv(path) -> FRFSet:
         run_order = parse_run_order(text, f"{src}:{ln}:run_order")
     test = parse_test(meta["test"][1], f"{src}:{meta['test'][0]}:test") if "test" in meta else None
     return FRFSet(freq, frf, points, quantity, excitation, reference, src, control,
-                  run_order, force, test)
+                  run_order, force, test, coherence)
 
 
 
@@ -240,13 +251,15 @@ def write_frf_csv(path, frfset: FRFSet) -> None:
     lines = [f"# {key} = {text}" for key, text in header_values(frfset)]
     names = ["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]
     n_pts = len(frfset.points)
-    table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + (frfset.force is not None)))
+    extras = [(k, v) for k, v in (("force", frfset.force), ("coherence", frfset.coherence))
+              if v is not None]
+    table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + len(extras)))
     table[:, 0] = frfset.freq_hz
     table[:, 1:2 * n_pts + 1:2] = frfset.frf.real
     table[:, 2:2 * n_pts + 1:2] = frfset.frf.imag
-    if frfset.force is not None:
-        names.append("force")
-        table[:, -1] = frfset.force
+    for k, (name, v) in enumerate(extras):
+        names.append(name)
+        table[:, 1 + 2 * n_pts + k] = v
     lines.append(",".join(names))
     lines.extend(",".join(repr(float(v)) for v in row) for row in table)
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -323,8 +336,9 @@ def write_frf_uff(path, frfset: FRFSet) -> None:
     id4 = id4 or "NONE"
     if len(id4) > 80:
         raise ValueError(f"UFF ID line too long for the keys ({id4!r}); use CSV")
-    if frfset.force is not None:
-        raise ValueError("a universal file has no force column; write CSV to keep it")
+    if frfset.force is not None or frfset.coherence is not None:
+        raise ValueError("a universal file has no force column (nor coherence); write CSV "
+                         "to keep it")
     dsets = []
     for j, label in enumerate(frfset.points):
         node, direction = _node_dir(label, j + 1)

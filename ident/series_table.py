@@ -91,8 +91,8 @@ def series_table(fits) -> MeasuredData:
         raise InputError("the files mix test = stepped-sine and random; one series has one "
                          "test type (give --test to override the files)")
     signature = [None if f.frfset.test == "random" else
-                 random_signature(f.frfset.freq_hz, f.frfset.frf, f.result.modes, f.quantity)
-                 for f in fits]
+                 random_signature(f.frfset.freq_hz, f.frfset.frf, f.result.modes, f.quantity,
+                                  f.frfset.coherence) for f in fits]
     if len(controls) > 1:
         raise InputError("the files mix control = force and response; one series has one "
                          "control (give --control to override the files)")

@@ -175,6 +175,10 @@ def test_csv_and_uff_time_records_round_trip(tmp_path):
     a = load_series([tmp_path / "r.csv"])
     b = load_series([tmp_path / "r.uff"])
     np.testing.assert_allclose(a.zeta, b.zeta, rtol=1e-6)
+    rounded = TimeRecord(np.round(10 + t, 3), x, ["1"])      # times printed to 1 ms
+    assert rounded.sample_rate == pytest.approx(1000.0, rel=1e-9)
+    with pytest.raises(InputError, match="uniform steps"):
+        TimeRecord(np.delete(t, 500), np.delete(x, 500), ["1"])      # a dropped sample
     (tmp_path / "bad.csv").write_text("# test = free-decay\ntime_s,1\n0,1\n0.1,x\n")
     with pytest.raises(InputError, match="bad.csv:4"):
         read_time_record(tmp_path / "bad.csv")

@@ -157,3 +157,27 @@ def test_cli_test_option_overrides_the_files(random_series, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["estimate", *random_series["bare"], "--test", "white"])
     assert exc.value.code == 2
+
+
+def test_coherence_column_round_trips_and_names_a_random_test(random_series, tmp_path):
+    """A level file with a coherence column (an averaged estimate) given as stepped sine:
+    the warning says so; CSV keeps the column exactly; out-of-range values are refused."""
+    from ident.frf_files import read_frf
+    paths = []
+    for k, p in enumerate(random_series["bare"]):
+        s = read_frf(p)
+        s.coherence = np.linspace(0.5, 0.99, s.freq_hz.size)
+        paths.append(tmp_path / f"coh_{k}.csv")
+        write_frf(paths[-1], s)
+    back = read_frf(paths[0])
+    np.testing.assert_array_equal(back.coherence, np.linspace(0.5, 0.99, back.freq_hz.size))
+    data = load_series(paths, n_modes=1)
+    assert sum("coherence column" in w for w in data.warnings) == len(paths)
+    text = paths[0].read_text().splitlines()
+    head = text.index(next(t for t in text if t.startswith("freq_hz")))
+    row = text[head + 1].split(",")
+    row[-1] = "1.5"
+    text[head + 1] = ",".join(row)
+    paths[0].write_text("\n".join(text) + "\n")
+    with pytest.raises(ValueError, match="coherence must be in"):
+        read_frf(paths[0])

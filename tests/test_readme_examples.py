@@ -1,8 +1,9 @@
-"""The README's example outputs are what the commands print (docs/examples.py).
+"""The example outputs of README.md and docs/*.md are what the commands print
+(docs/examples.py).
 
 Runs every example not marked ``slow`` (``gl`` ones only where off-screen rendering
-works) in a scratch folder and compares with the README, ignoring only timings and the
-scratch folder's path. On drift: ``python docs/examples.py`` rewrites the README.
+works) in a scratch folder and compares with the pages, ignoring only timings and the
+scratch folder's path. On drift: ``python docs/examples.py`` rewrites the pages.
 """
 from __future__ import annotations
 
@@ -28,14 +29,23 @@ def test_example_blocks_are_well_formed():
     sys.path.insert(0, str(ROOT / "docs"))
     import examples
 
-    lines = (ROOT / "README.md").read_text(encoding="utf-8").split("\n")
-    found = examples.find_examples(lines)
-    assert len(found) >= 9
+    pages = examples.pages()
+    assert ROOT / "README.md" in pages and ROOT / "docs/commands.md" in pages
+    found = [ex for page in pages
+             for ex in examples.find_examples(page.read_text(encoding="utf-8").split("\n"))]
+    assert len(found) >= 12
     assert all(ex.commands for ex in found)
     # every command shown in an example block is run, none is hand-written output
     commands = [c for ex in found for _, c in ex.commands]
     assert any(c.startswith("iwanfe joint") for c in commands)
     assert any(c.startswith("iwanfe uncertainty") for c in commands)
+    assert any(c.startswith("python examples/") for c in commands)
+
+
+def test_readme_is_a_front_page():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= 200
+    assert "make run" in text and "make test" in text
 
 
 def test_normalization_ignores_only_timings():
