@@ -10,8 +10,12 @@ levels x 65 lines, 236-268 Hz):
 2. Newmark (``--protocol newmark``, :mod:`cases.double_beam.protocols`: every line
    started on its harmonic-balance orbit, 256 steps per period, 2048 on levels that
    reach macro-slip, periodic to 1e-5), the orbits it starts from included in its cost;
-3. on levels 7 and 9, Newmark with the state carried from line to line from rest (a
-   stepped-sine test's protocol) against the orbit start: what the start saves.
+3. the same Newmark campaign without the period-map Newton step (``period_newton =
+   False``, the protocol before issue 21: each line integrated from its orbit until the
+   drift bound falls below the tolerance), timed in the same run: before / after;
+4. with ``--carried``, on levels 7 and 9, Newmark with the state carried from line to
+   line from rest (a stepped-sine test's protocol) against the orbit start: what the
+   start saves (minutes).
 
 Both campaigns are identified as the study does (LSCF at the response DOF); the
 per-level frequency and damping ratios and their relative differences are printed
@@ -19,8 +23,9 @@ with the campaign costs (thread CPU time, wall time in brackets) and their ratio
 One thread (NUMBA/OPENBLAS/OMP/MKL_NUM_THREADS = 1 set before numpy is imported).
 Usage::
 
-    python benchmarks/bench_newmark_campaign.py           # 3-5 minutes
+    python benchmarks/bench_newmark_campaign.py           # about 1 minute
     python benchmarks/bench_newmark_campaign.py --quick   # levels 1, 7, 9 only
+    python benchmarks/bench_newmark_campaign.py --carried # + part 4 (minutes)
 """
 from __future__ import annotations
 
@@ -57,6 +62,8 @@ def timed(fn):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="levels 1, 7 and 9 only")
+    ap.add_argument("--carried", action="store_true",
+                    help="also levels 7 and 9 with the state carried from rest (minutes)")
     args = ap.parse_args(argv)
 
     import numba
@@ -94,9 +101,24 @@ def main(argv=None) -> int:
           f"steps, {1e6 * cpu['newmark'] / comp['newmark']['steps_total']:.2f} us per step): "
           f"Newmark / HB = {cpu['newmark'] / cpu['hb']:.0f}x")
 
-    # 3. what the orbit start saves: whole levels, state carried from rest instead
+    # 3. before / after: the same campaign without the period-map Newton step
+    before = dataclasses.replace(camps["newmark"], protocol=dataclasses.replace(
+        camps["newmark"].protocol, period_newton=False))
+    res_b, cpu_b, wall_b = timed(lambda: run_campaign(red, bank, before, progress=False))
+    ra, rb = res["newmark"].receptance, res_b.receptance      # (levels, lines, outputs)
+    dmax = np.abs(rb - ra).max(axis=1)
+    d_out = (dmax / np.abs(ra).max(axis=1)).max()              # of each output's peak
+    d_lvl = (dmax.max(axis=1) / np.abs(ra).max(axis=(1, 2))).max()   # of the level's
     print()
-    for lv in (6, 8):
+    print(f"3. Newmark campaign without / with the period-map Newton step (fe.newmark_period): "
+          f"{cpu_b:.1f} s [{wall_b:.1f}] / {cpu['newmark']:.1f} s [{wall['newmark']:.1f}] = "
+          f"{cpu_b / cpu['newmark']:.1f}x; periods per line {res_b.work.mean():.1f} / "
+          f"{res['newmark'].work.mean():.1f} (largest {res_b.work.max():.0f} / "
+          f"{res['newmark'].work.max():.0f}); receptances differ by {d_lvl:.1e} of the level's "
+          f"largest, {d_out:.1e} of each output's own peak (relative)")
+
+    # 4. what the orbit start saves: whole levels, state carried from rest instead
+    for lv in (6, 8) if args.carried else ():
         if lv not in keep:
             continue
         i = int(np.flatnonzero(keep == lv)[0])
@@ -106,7 +128,7 @@ def main(argv=None) -> int:
         (a, ca, wa), (b, cb, wb) = (timed(lambda: run_level(red, bank, c, i))
                                     for c in (one, carried))
         d = np.abs(b.receptance[:, model.response_dof] / a.receptance[:, model.response_dof] - 1)
-        print(f"3. level {lv + 1}, all {study.lines.size} lines, tol {one.protocol.tol:g}: "
+        print(f"4. level {lv + 1}, all {study.lines.size} lines, tol {one.protocol.tol:g}: "
               f"orbit start {a.work.mean():.0f} periods/line, {ca:.2f} s [{wa:.2f}]; state "
               f"carried from rest {b.work.mean():.0f} periods/line, {cb:.2f} s [{wb:.2f}]: "
               f"{cb / ca:.1f}x; receptances differ by {d.max():.1e}")

@@ -56,6 +56,7 @@ COMMANDS = [
     "diagnose",
     "backbone",
     "update",
+    "ringdown",
 ]
 
 #: A command-line word that is a number, not an option: argparse's own pattern misses

@@ -12,13 +12,17 @@
 
 With FRF files (one per level) the identification runs first, as ``iwanfe identify``
 would: ``--band``, ``--modes``, ``--quantity`` choose it; ``--excitation``,
-``--control``, ``--run-order`` and ``--reference`` override the files' headers.
+``--control``, ``--run-order``, ``--reference`` and ``--test`` override the files'
+headers. A free-decay time record (``time_s`` column, ``# test = free-decay``; CSV or
+UFF 58 time data) is identified along its decay (:mod:`ident.free_decay_table`;
+``--band`` and ``--rows`` choose it).
 """
 from __future__ import annotations
 
 import sys
 
-from ident.frf_header import CONTROLS
+from ident.free_decay import DEFAULT_ROWS
+from ident.frf_header import CONTROLS, FRF_TESTS
 from ident.poles import QUANTITIES
 from ident.series import load_series
 
@@ -44,7 +48,14 @@ def add_series_arguments(parser, required: bool = True, files_help: str | None =
     group.add_argument("--run-order", type=int, nargs="+", default=None, metavar="K",
                        help="run order of each FRF file (overrides the files)")
     group.add_argument("--reference", default=None, metavar="POINT",
-                       help="drive point label (overrides the files)")
+                       help="drive point label (overrides the files); of a time record: "
+                            "the point whose amplitude is the abscissa")
+    group.add_argument("--test", choices=FRF_TESTS, default=None,
+                       help="test type of every FRF file (overrides the files; default "
+                            "stepped-sine): random = H1 averaged over broadband random "
+                            "excitation, --excitation its drive RMS")
+    group.add_argument("--rows", type=int, default=DEFAULT_ROWS, metavar="N",
+                       help="free-decay record: geometric amplitude bins along the decay")
 
 
 def progress_bar(n):
@@ -63,6 +74,8 @@ def check_series_args(args) -> None:
         raise ValueError(f"--modes must be >= 1, got {args.modes}")
     if args.band is not None and not args.band[0] < args.band[1]:
         raise ValueError(f"--band needs LO < HI, got {args.band[0]:g} {args.band[1]:g}")
+    if getattr(args, "rows", DEFAULT_ROWS) < 4:
+        raise ValueError(f"--rows must be >= 4, got {args.rows}")
 
 
 def series_from_args(args):
@@ -71,4 +84,5 @@ def series_from_args(args):
     return load_series(args.files, band=args.band, n_modes=args.modes, quantity=args.quantity,
                        excitation=args.excitation, control=args.control,
                        run_order=args.run_order, reference=args.reference,
-                       progress=progress_bar(len(args.files)))
+                       progress=progress_bar(len(args.files)), test=args.test,
+                       decay_options={"n_rows": args.rows})

@@ -15,12 +15,15 @@ stepped-sine series")::
   it held the drive-point response amplitude), ``run_order`` (integer >= 1, when the
   level was measured), ``excitation`` (> 0: the level held: the drive amplitude, force or
   voltage, under force control; the drive-point response amplitude, in the unit of the
-  FRF's response, under response control) and ``reference`` (label of the drive point);
+  FRF's response, under response control), ``reference`` (label of the drive point)
+  and ``test`` (``stepped-sine`` default, or ``random``: H1 averaged over a random
+  record, ``excitation`` its drive RMS; :mod:`ident.frf_header`);
 * then one header line: ``freq_hz`` (Hz, strictly increasing, > 0; any spacing) and,
   for every response point ``P``, the pair ``re_P`` / ``im_P`` (real and imaginary part
   of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
   a comma; points keep the order of their ``re_`` columns. One optional ``force``
-  column: the measured force amplitude at the reference on that line (N, > 0). No
+  column: the measured force amplitude at the reference on that line (N, > 0); one
+  optional ``coherence`` column (0..1, of an averaged estimate: a random test). No
   other columns.
 
 Errors are :class:`ident.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
@@ -31,7 +34,7 @@ response point; all must share the reference node/direction and the abscissa.
 Point label = ``"<node><+|-><X|Y|Z|RX|RY|RZ>"`` (``"<node>"`` for a scalar direction).
 Quantity from the ordinate specific data type (8 displacement -> receptance,
 11 velocity -> mobility, 12 acceleration -> accelerance). The keys ``excitation``,
-``control``, ``run_order`` and ``reference`` may stand in the ID lines of the first data
+``control``, ``run_order``, ``reference`` and ``test`` may stand in the ID lines of the first data
 set as ``key=value`` (the writer puts them in ID line 4); ``reference`` there overrides
 the label built from the reference node. A universal file has no force column.
 """
@@ -47,8 +50,9 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError, text_file
-from ident.frf_header import (CONTROLS, HEADER_KEYS, header_values, id_line_values,
-                              parse_control, parse_excitation, parse_run_order)
+from ident.frf_header import (CONTROLS, FRF_TESTS, HEADER_KEYS, header_values,
+                              id_line_values, parse_control, parse_excitation,
+                              parse_run_order, parse_test)
 from ident.poles import QUANTITIES
 from ident.uff_sets import read_uff_sets
 
@@ -77,6 +81,8 @@ class FRFSet:
     control : "force", "response" or None (not stated).
     run_order : chronological order of the level (int >= 1) or None.
     force : (n,) measured force amplitude at the reference per line (N) or None.
+    test : "stepped-sine", "random" or None (not stated: stepped sine).
+    coherence : (n,) ordinary coherence at the drive point per line, or None.
     """
 
     freq_hz: np.ndarray
@@ -89,6 +95,8 @@ class FRFSet:
     control: str | None = None
     run_order: int | None = None
     force: np.ndarray | None = None
+    test: str | None = None
+    coherence: np.ndarray | None = None
 
     def __post_init__(self):
         self.freq_hz = np.asarray(self.freq_hz, float)
@@ -102,13 +110,17 @@ class FRFSet:
         if self.quantity is not None and self.quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, "
                              f"got {self.quantity!r}")
+        if self.test is not None and self.test not in FRF_TESTS:
+            raise ValueError(f"test must be one of {', '.join(FRF_TESTS)}, got {self.test!r}")
         if self.control is not None and self.control not in CONTROLS:
             raise ValueError(f"control must be force or response, got {self.control!r}")
-        if self.force is not None:
-            self.force = np.asarray(self.force, float)
-            if self.force.shape != self.freq_hz.shape:
-                raise ValueError(f"force has shape {self.force.shape}, one value per "
-                                 f"frequency ({self.freq_hz.size}) is needed")
+        for name in ("force", "coherence"):
+            v = getattr(self, name)
+            if v is not None:
+                setattr(self, name, np.asarray(v, float))
+                if getattr(self, name).shape != self.freq_hz.shape:
+                    raise ValueError(f"{name} has shape {np.shape(v)}, one value per "
+                                     f"frequency ({self.freq_hz.size}) is needed")
 
 
 def _fail(source, line, column, message):
@@ -146,17 +158,17 @@ def read_frf_csv(path) -> FRFSet:
         _fail(src, 1, 1, "empty file: expected a header line")
     if header[0] != "freq_hz":
         _fail(src, header_line, header[0] or 1, "first column must be 'freq_hz'")
-    points, re_col, im_col, force_col = [], {}, {}, None
+    points, re_col, im_col, extra_col = [], {}, {}, {}
     for j, name in enumerate(header[1:], start=1):
-        if name == "force":
-            if force_col is not None:
+        if name in ("force", "coherence"):
+            if name in extra_col:
                 _fail(src, header_line, name, "duplicate column name")
-            force_col = j
+            extra_col[name] = j
             continue
         part, _, label = name.partition("_")
         if part not in ("re", "im") or not label:
             _fail(src, header_line, name,
-                  "unknown column: expected re_<point>, im_<point> or force")
+                  "unknown column: expected re_<point>, im_<point>, force or coherence")
         target = re_col if part == "re" else im_col
         if label in target:
             _fail(src, header_line, name, "duplicate column name")
@@ -195,9 +207,15 @@ def read_frf_csv(path) -> FRFSet:
     if bad.size:
         _fail(src, lines[bad[0] + 1], "freq_hz", "frequencies must be strictly increasing")
     frf = values[:, [re_col[p] for p in points]] + 1j * values[:, [im_col[p] for p in points]]
-    force = None
-    if force_col is not None:
-        force = values[:, force_col]
+    force = coherence = None
+    if "coherence" in extra_col:
+        coherence = values[:, extra_col["coherence"]]
+        bad = np.flatnonzero((coherence < 0) | (coherence > 1))
+        if bad.size:
+            _fail(src, lines[bad[0]], "coherence",
+                  f"coherence must be in [0, 1], got {coherence[bad[0]]:g}")
+    if "force" in extra_col:
+        force = values[:, extra_col["force"]]
         bad = np.flatnonzero(force <= 0)
         if bad.size:
             _fail(src, lines[bad[0]], "force", f"force must be > 0 N, got {force[bad[0]]:g}")
@@ -219,8 +237,9 @@ def read_frf_csv(path) -> FRFSet:
     if "run_order" in meta:
         ln, text = meta["run_order"]
         run_order = parse_run_order(text, f"{src}:{ln}:run_order")
+    test = parse_test(meta["test"][1], f"{src}:{meta['test'][0]}:test") if "test" in meta else None
     return FRFSet(freq, frf, points, quantity, excitation, reference, src, control,
-                  run_order, force)
+                  run_order, force, test, coherence)
 
 
 
@@ -232,13 +251,15 @@ def write_frf_csv(path, frfset: FRFSet) -> None:
     lines = [f"# {key} = {text}" for key, text in header_values(frfset)]
     names = ["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]
     n_pts = len(frfset.points)
-    table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + (frfset.force is not None)))
+    extras = [(k, v) for k, v in (("force", frfset.force), ("coherence", frfset.coherence))
+              if v is not None]
+    table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + len(extras)))
     table[:, 0] = frfset.freq_hz
     table[:, 1:2 * n_pts + 1:2] = frfset.frf.real
     table[:, 2:2 * n_pts + 1:2] = frfset.frf.imag
-    if frfset.force is not None:
-        names.append("force")
-        table[:, -1] = frfset.force
+    for k, (name, v) in enumerate(extras):
+        names.append(name)
+        table[:, 1 + 2 * n_pts + k] = v
     lines.append(",".join(names))
     lines.extend(",".join(repr(float(v)) for v in row) for row in table)
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -291,7 +312,7 @@ def read_frf_uff(path) -> FRFSet:
         raise InputError(f"{src}: non-finite frequency or FRF value")
     reference = keys.get("reference") or _label(*refs.pop())
     return FRFSet(x, frf, points, quantity, keys.get("excitation"), reference, src,
-                  keys.get("control"), keys.get("run_order"))
+                  keys.get("control"), keys.get("run_order"), test=keys.get("test"))
 
 
 def write_frf_uff(path, frfset: FRFSet) -> None:
@@ -315,8 +336,9 @@ def write_frf_uff(path, frfset: FRFSet) -> None:
     id4 = id4 or "NONE"
     if len(id4) > 80:
         raise ValueError(f"UFF ID line too long for the keys ({id4!r}); use CSV")
-    if frfset.force is not None:
-        raise ValueError("a universal file has no force column; write CSV to keep it")
+    if frfset.force is not None or frfset.coherence is not None:
+        raise ValueError("a universal file has no force column (nor coherence); write CSV "
+                         "to keep it")
     dsets = []
     for j, label in enumerate(frfset.points):
         node, direction = _node_dir(label, j + 1)

@@ -5,7 +5,15 @@ no comment lines). Required columns ``level`` (1-based), ``excitation`` (> 0, an
 proportional to force), ``omega2`` (rad^2/s^2, > 0), ``zeta`` (fraction in (0, 1));
 optional ``mode`` (default 1), ``response_amplitude`` (> 0), ``run_order`` (default
 ``level``), ``omega2_std``/``zeta_std`` (> 0), ``control`` (``force``/``response``),
-and free ``x_*`` annotations (kept, otherwise ignored).
+``test`` (``stepped-sine`` default, ``random``, ``free-decay``) and free ``x_*``
+annotations (kept, otherwise ignored).
+
+Test types (spec "Other test types"): a mode's rows share one ``test``. ``random`` and
+``free-decay`` rows need ``response_amplitude`` (the response RMS in the mode's band,
+the envelope along the decay), which must increase with ``level``: it is their
+abscissa, as under response control. ``free-decay`` rows need no ``excitation``
+(the column may be absent when every row is a free decay, or the field empty; kept as
+NaN and written empty).
 
 Every violated rule raises :class:`ident.errors.InputError` with one line
 ``FILE:LINE:COLUMN: message`` (LINE 1-based, the header is line 1; COLUMN the column
@@ -39,11 +47,11 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError, text_file
-from ident.modal_data import MeasuredData, annotation_warnings
+from ident.modal_data import TESTS, MeasuredData, annotation_warnings
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
 OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order", "omega2_std", "zeta_std",
-                    "control")
+                    "control", "test")
 CONTROLS = ("force", "response")
 KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_LEVELS = 4
@@ -121,6 +129,8 @@ def _check_header(header: list[str], source: str) -> None:
             _fail(source, 1, name, "unknown column (known: " + ", ".join(KNOWN_COLUMNS)
                   + "; free annotations must start with 'x_')")
     for name in REQUIRED_COLUMNS:
+        if name == "excitation" and "test" in seen:
+            continue   # free-decay rows need none: checked row by row
         if name not in seen:
             _fail(source, 1, name, "missing required column (header: "
                   + ", ".join(header) + ")")
@@ -166,7 +176,24 @@ def read_measured(path) -> MeasuredData:
         return np.array([_parse_int(f[col[name]], source, ln, name) for ln, f in rows], int)
 
     level = ints("level")
-    excitation = floats("excitation")
+    if "test" in col:
+        test = np.array([f[col["test"]].lower() for _, f in rows], dtype=str)
+        first_bad_test = np.flatnonzero(~np.isin(test, TESTS))
+        if first_bad_test.size:
+            i = first_bad_test[0]
+            _fail(source, lines[i], "test",
+                  f"test must be one of {', '.join(TESTS)}, got {test[i]!r}")
+    else:
+        test = np.full(n, "stepped-sine")
+    def excitation_of(i, ln, fields):
+        text = fields[col["excitation"]] if "excitation" in col else ""
+        if not text and test[i] == "free-decay":
+            return math.nan                     # a free decay has no excitation
+        if "excitation" not in col:
+            _fail(source, ln, "excitation", f"a {test[i]} row needs an excitation")
+        return _parse_float(text, source, ln, "excitation")
+
+    excitation = np.array([excitation_of(i, ln, f) for i, (ln, f) in enumerate(rows)])
     omega2 = floats("omega2")
     zeta = floats("zeta")
     mode = ints("mode") if "mode" in col else np.ones(n, int)
@@ -186,7 +213,7 @@ def read_measured(path) -> MeasuredData:
             _fail(source, lines[i], name, message(i))
 
     first_bad(level < 1, "level", lambda i: f"level must be >= 1, got {level[i]}")
-    first_bad(excitation <= 0, "excitation",
+    first_bad(~np.isnan(excitation) & (excitation <= 0), "excitation",
               lambda i: f"excitation must be > 0, got {excitation[i]:g}")
     first_bad(omega2 <= 0, "omega2", lambda i: f"omega2 must be > 0 rad^2/s^2, got {omega2[i]:g}")
     first_bad((zeta <= 0) | (zeta >= 1), "zeta",
@@ -204,6 +231,9 @@ def read_measured(path) -> MeasuredData:
         first_bad(control == "response", "response_amplitude",
                   lambda i: "control = response needs a response_amplitude column (the "
                             "amplitude each level held)")
+        first_bad(test != "stepped-sine", "response_amplitude",
+                  lambda i: f"test = {test[i]} needs a response_amplitude column (its "
+                            "abscissa: the response RMS, or the envelope along the decay)")
 
     # Duplicate (mode, level): report the second occurrence in file order.
     key = np.stack([mode, level], axis=1)
@@ -223,7 +253,12 @@ def read_measured(path) -> MeasuredData:
         if controls.size > 1:
             _fail(source, lines[idx].min(), "control",
                   f"mode {m} mixes control = force and response; one series has one control")
-        name = "response_amplitude" if controls[0] == "response" else "excitation"
+        tests = np.unique(test[idx])
+        if tests.size > 1:
+            _fail(source, lines[idx].min(), "test",
+                  f"mode {m} mixes test types ({', '.join(tests)}); one series has one test")
+        name = ("response_amplitude" if controls[0] == "response" or tests[0] != "stepped-sine"
+                else "excitation")
         e = response[idx] if name == "response_amplitude" else excitation[idx]
         bad = np.flatnonzero(np.diff(e) <= 0)
         if bad.size:
@@ -257,7 +292,7 @@ def read_measured(path) -> MeasuredData:
     data = MeasuredData(level=level, excitation=excitation, omega2=omega2, zeta=zeta,
                         mode=mode, run_order=run_order, response_amplitude=response,
                         omega2_std=omega2_std, zeta_std=zeta_std, control=control,
-                        extra=extra, warnings=warnings, line=lines, source=source)
+                        test=test, extra=extra, warnings=warnings, line=lines, source=source)
     data.warnings.extend(annotation_warnings(data))
     return data
 
@@ -267,7 +302,8 @@ def write_measured(path, data: MeasuredData) -> None:
 
     Columns: level, excitation, omega2, zeta, mode, [response_amplitude,] run_order,
     [omega2_std, zeta_std,] [control (only when some entry is response-controlled),]
-    then the ``x_*`` annotations; floats with 17 significant digits (exact).
+    [test (only when some entry is not a stepped sine),] then the ``x_*`` annotations;
+    floats with 17 significant digits (exact); a NaN excitation (free decay) is empty.
     """
     names = ["level", "excitation", "omega2", "zeta", "mode"]
     cols = [data.level, data.excitation, data.omega2, data.zeta, data.mode]
@@ -283,6 +319,9 @@ def write_measured(path, data: MeasuredData) -> None:
     if np.any(data.control != "force"):
         names.append("control")
         cols.append(data.control)
+    if np.any(data.test != "stepped-sine"):
+        names.append("test")
+        cols.append(data.test)
     for k, v in data.extra.items():
         if not k.startswith("x_"):
             raise ValueError(f"extra column {k!r} must start with 'x_'")
@@ -293,7 +332,7 @@ def write_measured(path, data: MeasuredData) -> None:
         if isinstance(v, (int, np.integer)):
             return str(int(v))
         if isinstance(v, (float, np.floating)):
-            return repr(float(v))
+            return "" if math.isnan(v) else repr(float(v))
         return str(v)
 
     with open(path, "w", newline="", encoding="utf-8") as fh:

@@ -10,6 +10,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+#: Test types of ``shared/spec/measured-data.md`` ("Other test types").
+TESTS = ("stepped-sine", "random", "free-decay")
+
 
 @dataclass
 class MeasuredData:
@@ -31,6 +34,9 @@ class MeasuredData:
         identification, or None.
     control : ndarray of str
         ``"force"`` or ``"response"`` per entry (what the level held constant).
+    test : ndarray of str
+        ``"stepped-sine"`` (default), ``"random"`` or ``"free-decay"`` per entry
+        (:data:`TESTS`; ``shared/spec/measured-data.md``, "Other test types").
     extra : dict[str, ndarray]
         ``x_*`` annotation columns: float arrays where every value is numeric, else
         str arrays.
@@ -52,6 +58,7 @@ class MeasuredData:
     omega2_std: np.ndarray | None = None
     zeta_std: np.ndarray | None = None
     control: np.ndarray | None = None
+    test: np.ndarray | None = None
     extra: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
     line: np.ndarray | None = None
@@ -71,10 +78,12 @@ class MeasuredData:
                 setattr(self, name, np.asarray(getattr(self, name), dtype=float))
         self.control = (np.full(n, "force") if self.control is None
                         else np.asarray(self.control, dtype=str))
+        self.test = (np.full(n, "stepped-sine") if self.test is None
+                     else np.asarray(self.test, dtype=str))
         self.line = np.zeros(n, int) if self.line is None else np.asarray(self.line, dtype=int)
         self.extra = {k: np.asarray(v) for k, v in self.extra.items()}
         arrays = [self.excitation, self.omega2, self.zeta, self.mode, self.run_order,
-                  self.line, self.control, *self.extra.values()]
+                  self.line, self.control, self.test, *self.extra.values()]
         arrays += [a for a in (self.response_amplitude, self.omega2_std, self.zeta_std)
                    if a is not None]
         if any(a.shape != (n,) for a in arrays):
@@ -99,10 +108,17 @@ class MeasuredData:
         return bool(len(self)) and bool(np.all(self.control == "response"))
 
     @property
+    def response_abscissa(self) -> bool:
+        """True when the response amplitude is the abscissa of every entry: response
+        control, a random test (the response RMS) or a free decay (the envelope)."""
+        return bool(len(self)) and self.response_amplitude is not None and bool(np.all(
+            (self.control == "response") | np.isin(self.test, ("random", "free-decay"))))
+
+    @property
     def held_amplitude(self) -> np.ndarray:
-        """The amplitude each level held: ``response_amplitude`` under response control,
-        else ``excitation`` (the abscissa of the estimator and the diagnosis)."""
-        return self.response_amplitude if self.response_controlled else self.excitation
+        """The abscissa of the estimator and the diagnosis: ``response_amplitude`` when
+        :attr:`response_abscissa`, else ``excitation``."""
+        return self.response_amplitude if self.response_abscissa else self.excitation
 
     def take(self, index) -> "MeasuredData":
         """Entries selected by an index or boolean mask (warnings are kept)."""
@@ -116,7 +132,7 @@ class MeasuredData:
             omega2=self.omega2[index], zeta=self.zeta[index], mode=self.mode[index],
             run_order=self.run_order[index], response_amplitude=opt(self.response_amplitude),
             omega2_std=opt(self.omega2_std), zeta_std=opt(self.zeta_std),
-            control=self.control[index],
+            control=self.control[index], test=self.test[index],
             extra={k: v[index] for k, v in self.extra.items()}, line=self.line[index],
             warnings=list(self.warnings))
 

@@ -108,9 +108,11 @@ def is_frf_file(path) -> bool:
     return False
 
 
-def read_series_sets(paths, excitation=None, control=None, run_order=None, reference=None):
+def read_series_sets(paths, excitation=None, control=None, run_order=None, reference=None,
+                     test=None):
     """The FRF sets of a series with command-line values overriding the files'
-    (``excitation``, ``run_order``: one per file; ``control``, ``reference``: one)."""
+    (``excitation``, ``run_order``: one per file; ``control``, ``reference``, ``test``:
+    one)."""
     paths = [str(p) for p in paths]
     for name, values in (("--excitation", excitation), ("--run-order", run_order)):
         if values is not None and len(values) != len(paths):
@@ -121,20 +123,29 @@ def read_series_sets(paths, excitation=None, control=None, run_order=None, refer
         s = read_frf(p)
         sets.append(with_overrides(
             s, excitation=None if excitation is None else excitation[k], control=control,
-            run_order=None if run_order is None else run_order[k], reference=reference))
+            run_order=None if run_order is None else run_order[k], reference=reference,
+            test=test))
     return sets
 
 
 def load_series(paths, band=None, n_modes=None, quantity=None, excitation=None,
                 control=None, run_order=None, reference=None, options=None,
-                progress=None) -> MeasuredData:
-    """A measured-data table (one CSV file) or the FRF files of a series (one per level,
-    identified first): the input of ``iwanfe estimate`` and ``iwanfe diagnose``."""
+                progress=None, test=None, decay_options=None) -> MeasuredData:
+    """A measured-data table (one CSV file), the FRF files of a series (one per level,
+    identified first) or a free-decay time record (:mod:`ident.free_decay_table`):
+    the input of ``iwanfe estimate`` and ``iwanfe diagnose``."""
     from ident.measured import read_measured
+    from ident.time_records import is_time_record, read_time_record
 
     paths = [str(p) for p in paths]
     if not paths:
         raise InputError("no input file")
+    if any(is_time_record(p) for p in paths):
+        from ident.free_decay_table import free_decay_table
+        if len(paths) > 1:
+            raise InputError(f"{paths[1]}: one free-decay record at a time")
+        return free_decay_table(read_time_record(paths[0], reference=reference),
+                                band=band, **(decay_options or {}))
     frf = [is_frf_file(p) for p in paths]
     if not any(frf):
         if len(paths) > 1:
@@ -144,7 +155,7 @@ def load_series(paths, band=None, n_modes=None, quantity=None, excitation=None,
     if not all(frf):
         raise InputError(f"{paths[frf.index(False)]}: not an FRF file (the other files are): "
                          "give either one measured-data table or the FRF files of a series")
-    sets = read_series_sets(paths, excitation, control, run_order, reference)
+    sets = read_series_sets(paths, excitation, control, run_order, reference, test)
     fits = identify_series(sets, band=band, n_modes=n_modes, quantity=quantity,
                            options=options, progress=progress)
     return series_table(fits)

@@ -13,6 +13,12 @@ and writes one row per mode and level:
   at resonance: the ``force`` column at ``omega_d``, else the held level over the
   measured ``|H(omega_d)|`` (interpolated between lines).
 
+* random excitation (``# test = random``): ``excitation`` = the drive RMS,
+  ``response_amplitude`` = the mode's response RMS at the drive point
+  (:func:`ident.random_frf.mode_response_rms`); column ``test = random``. A level not
+  stated as random whose FRF looks averaged gets a one-line warning
+  (:func:`ident.random_frf.random_signature`).
+
 ``run_order`` comes from the files (all or none; default the file order),
 ``omega2_std``/``zeta_std`` from the identification (:mod:`ident.pole_uncertainty`;
 left out when a level has none), ``x_fit_error`` and ``x_warning`` carry the fit
@@ -31,6 +37,7 @@ from ident.errors import InputError
 from ident.frf_files import FRFSet
 from ident.modal_data import MeasuredData, annotation_warnings
 from ident.poles import modal_receptance
+from ident.random_frf import mode_response_rms, random_signature
 from ident.tracking import track_modes
 
 MIN_LEVELS = 4
@@ -63,6 +70,9 @@ def _amplitudes(f, mode):
     p, note = drive_point(s)
     f_d = mode.pole.imag / (2 * np.pi)
     force = None if s.force is None else float(np.interp(f_d, s.freq_hz, s.force))
+    if s.test == "random":
+        return s.excitation, mode_response_rms(mode, p, f.quantity, s.freq_hz,
+                                               s.excitation), note
     if f.control == "response":
         if force is None:
             force = s.excitation / float(np.interp(f_d, s.freq_hz, np.abs(s.frf[:, p])))
@@ -76,6 +86,13 @@ def series_table(fits) -> MeasuredData:
 
     ``fits``: the :class:`ident.series.LevelFit` of every level."""
     controls = {f.control for f in fits}
+    tests = {f.frfset.test or "stepped-sine" for f in fits}
+    if len(tests) > 1:
+        raise InputError("the files mix test = stepped-sine and random; one series has one "
+                         "test type (give --test to override the files)")
+    signature = [None if f.frfset.test == "random" else
+                 random_signature(f.frfset.freq_hz, f.frfset.frf, f.result.modes, f.quantity,
+                                  f.frfset.coherence) for f in fits]
     if len(controls) > 1:
         raise InputError("the files mix control = force and response; one series has one "
                          "control (give --control to override the files)")
@@ -120,6 +137,8 @@ def series_table(fits) -> MeasuredData:
         mode = f.result.modes[i]
         exc, amp, note = _amplitudes(f, mode)
         warn = list(f.warnings[i]) + ([note] if note else [])
+        if signature[k]:
+            warn.append(f"given as stepped sine, but {signature[k]}")
         warn += [f"a pole at {fits[kk].result.modes[ii].frequency_hz:.6g} Hz seen at "
                  f"{n} level(s) only was left out" for (kk, ii, _, _), n in dropped if kk == k]
         for key, v in zip(out, (level_of[k], exc, mode.omega2, mode.zeta, lab, amp,
@@ -135,6 +154,7 @@ def series_table(fits) -> MeasuredData:
         zeta=out["zeta"], mode=out["mode"], run_order=out["run"],
         response_amplitude=out["response"], omega2_std=stds[0] if has_std else None,
         zeta_std=stds[1] if has_std else None, control=[control] * len(out["level"]),
+        test=[tests.pop()] * len(out["level"]),
         extra={"x_frequency_hz": np.array(out["f"]), "x_stability": np.array(out["stab"]),
                "x_mac": np.array(out["mac"], float), "x_fit_error": np.array(out["err"]),
                "x_source": np.array(out["src"], dtype=str),

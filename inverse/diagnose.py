@@ -75,11 +75,14 @@ def observations_from(data: MeasuredData, mode: int | None = None):
     d = data.for_mode(int(mode))
     if len(set(d.control)) > 1:
         raise ValueError(f"mode {mode} mixes force- and response-controlled levels")
-    rc = d.response_controlled
+    rc = d.response_abscissa
     if rc:
         raw = np.asarray(d.response_amplitude, float)
-        warnings.append("response-controlled: the held response amplitude is the "
-                        "abscissa; nonproportional-amplitude does not apply")
+        what = {"random": "random test: the response RMS (micro-slip laws hold on it "
+                          "up to a constant factor, inverse.random_amplitude)",
+                "free-decay": "free decay: the envelope along the decay"}.get(
+            str(d.test[0]), "response-controlled: the held response amplitude")
+        warnings.append(f"{what} is the abscissa; nonproportional-amplitude does not apply")
     else:
         raw = d.excitation / (d.zeta * d.omega2)
     s = raw / raw.max()
@@ -245,9 +248,11 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         sep = {"inseparable": [], "untestable": {k: v for k, v in unavailable.items()
                                                  if "+" not in k},
                "note": f"not analysed: {cause} is named without a rival on {obs.n} levels"}
-    return assemble(
+    report = assemble(
         obs=obs, d=d, raw=raw, fits=fits, params=params, weight=weight, ic=ic,
         tests=tests, cv=cv, held=held, n_top=n_top(obs.n), noise=noise,
         unavailable=unavailable, contradictions=found, refuted=bool(refuted),
         cause=cause, also=also, best=best, rivals=rivals, separability=sep,
         warnings=warnings, t_cause=T_CAUSE, w_ambiguous=W_AMBIGUOUS)
+    report["test"] = str(d.test[0])
+    return report

@@ -13,7 +13,14 @@ grows, a loss of omega^2 below the least the micro-slip tie allows, chi outside
 Abscissa: the level's excitation, as in the paper (joint amplitude proportional to
 the excitation), or, for a response-controlled series (``control = response``), the
 response amplitude each level held, ``r = A / A_ref``: the mode's amplitude, and with it
-every joint's slip, is then known rather than assumed proportional to the force.
+every joint's slip, is then known rather than assumed proportional to the force. The
+rows of a free decay (``test = free-decay``: the envelope along the decay) and of a
+random test (``test = random``: the response RMS) are regressed on their response
+amplitude the same way. For a random series the joint sees Rayleigh amplitudes: its
+expected damping is ``c(chi)`` times the sine law at the RMS amplitude
+(:mod:`inverse.random_amplitude`), a constant factor on ``|kappa1| B`` that cancels in
+``r``: chi is that of a stepped sine; ``kappa1_B_sine = kappa1_B / c(chi)``. B~ and R~
+need the sinusoidal force of a stepped sine; for the other tests they stay null.
 
 Measured damping differences (from eq. 2):
 
@@ -37,6 +44,7 @@ from inverse.fe_reference import fe_reference
 from inverse.iwan_modal import EQ45_FACTOR, delta_c_from_zeta, kappa1_per_R, kappa_ratio, r_tilde
 from inverse.level_predictions import predict_levels
 from inverse.power_law import fit_damping_growth
+from inverse.random_amplitude import rayleigh_factor
 
 METHODS = ("paper", "exact", "amplitude")
 #: Newton per unit of the ``excitation`` column (N/V for the paper's drive voltage).
@@ -155,11 +163,15 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
 
     # abscissa: what each level held (excitation; the response amplitude under response
     # control, where it is the level's abscissa), or a supplied/measured amplitude
+    test = str(d.test[0])
+    held_label = {"random": "response_amplitude (RMS of a random test)",
+                  "free-decay": "response_amplitude (envelope of a free decay)"}.get(
+        test, "response_amplitude (held: control = response)")
     abscissa = "excitation"
     amp = d.excitation
-    if d.response_controlled:
+    if d.response_abscissa:
         amp = d.held_amplitude
-        abscissa = "response_amplitude (held: control = response)"
+        abscissa = held_label
     if method == "amplitude":
         if amplitude is not None:
             amp = np.asarray(amplitude, dtype=float).ravel()
@@ -168,8 +180,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
             abscissa = "amplitude (supplied)"
         elif d.response_amplitude is not None:
             amp = d.response_amplitude
-            abscissa = ("response_amplitude (held: control = response)"
-                        if d.response_controlled else "response_amplitude")
+            abscissa = held_label if d.response_abscissa else "response_amplitude"
         else:
             raise InputError(f"method 'amplitude' needs a response_amplitude column in "
                              f"{d.source or 'the data'} (or amplitudes from a simulation)")
@@ -274,7 +285,10 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
 
     # ------------------------------------------------------------ model: B~ and R~
     case_res, B, R, R_iv = None, None, None, None
-    if model is not None:
+    if model is not None and test != "stepped-sine":
+        warnings.append(f"test = {test}: B~ and R~ need the sinusoidal force of a stepped "
+                        "sine; left null")
+    elif model is not None:
         case_res = fe_reference(model, d, ref, force_scale, fe_mode=fe_mode, chi=fitres.chi,
                                 name=case_name)
         B = case_res.B
@@ -292,6 +306,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
 
     kappa = "paper" if method == "paper" else "exact"  # the kappa2 of kappa2/|kappa1|
     contradictions = iwan_contradictions(d, chi=fitres.chi)
+    random = test == "random" and -1.0 < fitres.chi <= 0.0
     return Estimate(
         method=method, mode=mode, fit_levels=fit, reference_level=int(levels[ref]),
         reference_excitation=float(d.excitation[ref]), chi=fitres.chi,
@@ -307,4 +322,6 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
         data_warnings=warnings, case=case_res, fit=fitres, abscissa=abscissa,
         control=str(d.control[0]), reference_amplitude=float(amp[ref]),
         contradictions=[c.statement for c in contradictions],
-        contradiction_details=[{"kind": c.kind, **c.numbers} for c in contradictions])
+        contradiction_details=[{"kind": c.kind, **c.numbers} for c in contradictions],
+        test=test, rayleigh_factor=rayleigh_factor(fitres.chi) if random else None,
+        kappa1_B_sine=fitres.kappa1_B / rayleigh_factor(fitres.chi) if random else None)

@@ -24,6 +24,9 @@ class Estimate:
     value at the reference level); ``contradictions`` are plain statements of what the
     data show that no Iwan joint can do (:mod:`inverse.contradictions`).
     ``kappa2_over_kappa1`` is the Iwan value only where ``chi_in_range``.
+    ``test`` is the series' test type; for ``random`` ``rayleigh_factor`` is ``c(chi)``
+    of :mod:`inverse.random_amplitude` and ``kappa1_B_sine`` the stepped-sine
+    ``|kappa1| B`` at the reference RMS amplitude (``kappa1_B / c``); None otherwise.
     """
 
     method: str
@@ -60,6 +63,9 @@ class Estimate:
     reference_amplitude: float = float("nan")
     contradictions: list = field(default_factory=list)
     contradiction_details: list = field(default_factory=list)
+    test: str = "stepped-sine"
+    rayleigh_factor: float | None = None
+    kappa1_B_sine: float | None = None
 
     @property
     def chi_in_range(self) -> bool:
@@ -96,5 +102,6 @@ class Estimate:
             "predictions": self.predictions, "data_warnings": self.data_warnings,
             "contradictions": self.contradictions,
             "contradiction_details": self.contradiction_details,
-            "case": case,
+            "case": case, "test": self.test, "rayleigh_factor": self.rayleigh_factor,
+            "kappa1_B_sine": self.kappa1_B_sine,
         }

@@ -71,7 +71,11 @@ class NewmarkProtocol:
     ``macro_steps_per_period`` (with ``hb_start``) is used instead of
     ``steps_per_period`` on a level whose harmonic-balance orbits leave micro-slip (a
     slip amplitude at or above the bank's largest slip limit at some line), where the
-    joint force is far from smooth (:meth:`steps_for`).
+    joint force is far from smooth (:meth:`steps_for`). ``period_newton`` (with
+    ``hb_start``, ``alpha = 0``): after each period the start of the next is moved by a
+    Newton step on the period map with the monodromy of the model linearized on the
+    line's harmonic-balance orbit (:mod:`fe.newmark_period`), as long as the change over
+    a period keeps falling; the steady state is still the integration's own.
     """
 
     steps_per_period: int = 256
@@ -82,6 +86,7 @@ class NewmarkProtocol:
     prewarp: bool = True
     hb_start: HBSettings | None = None
     macro_steps_per_period: int | None = None
+    period_newton: bool = False
     name: str = "newmark"
 
     def steps_for(self, slip_amplitude_max: float, slip_limit_max: float) -> int:

@@ -26,6 +26,7 @@ import numpy as np
 
 from fe.harmonic_balance import continuation
 from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
+from fe.newmark_period import PeriodNewton, joint_equivalent, linear_monodromy, period_step
 from fe.newton_path import SteadyStateError
 from fe.reduction import JointBank, ReducedModel
 from runs.campaign import Campaign, CampaignResult, LevelResult, NewmarkProtocol, PaperProtocol
@@ -108,20 +109,31 @@ def _newmark_level(model, bank, campaign, F, tick):
             w = w * np.pi / (N * np.tan(np.pi / N))
         dt = 2 * np.pi / (w * N)
         stepper = NewmarkIntegrator(model, bank, NewmarkSettings(dt=dt, alpha=pr.alpha))
+        newton = None
         if orbits is not None:
             o = orbits[li]
             state = NewmarkState.periodic(model, bank, o.harmonics, o.q, w, load.real, N, dt)
             phase = 0.0
+            if pr.period_newton and pr.alpha == 0.0:
+                newton = _period_newton(model, o, dt, N)
         theta = phase + w * dt * k
         e = np.cos(theta)
         state.e = e[0]
-        prev, d_hist = None, []
+        prev, d_hist, jump = None, [], np.inf
         for p in range(1, pr.max_periods + 1):
             try:
                 run = stepper.run(load, e, state, energy=False)
             except RuntimeError as exc:          # the per-step Newton of the joints
                 raise SteadyStateError(f"{f_hz:g} Hz", str(exc), solver="Newmark") from None
-            state = run.state
+            start, state = state, run.state
+            if newton is not None:   # fe.newmark_period; a growing change: a plain period
+                change = np.linalg.norm(np.concatenate([state.q - start.q, state.v - start.v]))
+                jump = min(jump, change)
+                if change <= 4.0 * jump:
+                    state = period_step(model, bank, start, state, newton, load.real)
+                else:
+                    newton.reset()
+                    jump = change
             z = np.concatenate([_first_harmonic(run.q[:-1] @ Bout.T, theta[:-1]),
                                 _first_harmonic(run.slip[:-1], theta[:-1])])
             if prev is not None:
@@ -147,6 +159,13 @@ def _newmark_level(model, bank, campaign, F, tick):
         if tick is not None:
             tick.update(1)
     return rec, slip, amp, work
+
+
+def _period_newton(model, orbit, dt, n_steps):
+    """Newton on the period map from the monodromy linearized on ``orbit``
+    (:mod:`fe.newmark_period`)."""
+    k_g, c_g = joint_equivalent(orbit.slip, orbit.joint_force, orbit.harmonics, orbit.omega)
+    return PeriodNewton(linear_monodromy(model, dt, n_steps, k_g, c_g))
 
 
 def _paper_level(model, bank, campaign, F, tick):

@@ -17,7 +17,12 @@ Both solve the same discrete model (same basis, same banks), so what can separat
   orbit of that line (:meth:`fe.newmark.NewmarkState.periodic`), and only the small
   difference between the two steady states has to decay (measured, all 65 lines:
   10 periods per line at level 7 and 41 at level 9 against 400 with the state carried
-  from rest, whose drift bound is also less reliable: 2.5e-6 off at tol 1e-7);
+  from rest, whose drift bound is also less reliable: 2.5e-6 off at tol 1e-7). That
+  difference decays with the mode's own damping (250-330 periods on the resonant lines
+  of level 9), so after each period the next one starts from a Newton step on the
+  period map (:mod:`fe.newmark_period`: the monodromy of the model linearized on the
+  line's orbit, Broyden-updated): 5 periods per line at levels 1-9 and 11 at level 10
+  (36 before), the same steady states and identified values;
 * the time step: :data:`NEWMARK_STEPS` steps per period, the trapezoidal rule's
   frequency error removed by pre-warping (exact for the linear part). In macro-slip the
   joint force is far from smooth and the structure's higher modes answer its high
@@ -65,7 +70,7 @@ def campaign_protocol(name: str, hb: HBSettings):
         return HBProtocol(hb)
     if name == "newmark":
         return NewmarkProtocol(steps_per_period=NEWMARK_STEPS, tol=NEWMARK_TOL, hb_start=hb,
-                               macro_steps_per_period=NEWMARK_MACRO_STEPS)
+                               macro_steps_per_period=NEWMARK_MACRO_STEPS, period_newton=True)
     raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {name!r}")
 
 
@@ -109,7 +114,8 @@ def protocol_comparison(levels, newmark: tuple, hb: tuple, newmark_result,
         "met": bool(df <= FREQUENCY_TARGET and dz <= ZETA_TARGET),
         "newmark": {"steps_per_period": NEWMARK_STEPS,
                     "steps_per_period_macro_slip": NEWMARK_MACRO_STEPS, "tol": NEWMARK_TOL,
-                    "start": "harmonic-balance orbit of each line",
+                    "start": "harmonic-balance orbit of each line, then Newton on the "
+                             "period map (fe.newmark_period)",
                     "campaign_s": float(np.sum(newmark_result.elapsed)),
                     "levels_computed": int(np.sum(newmark_result.computed)),
                     "periods_total": float(np.sum(newmark_result.work)),

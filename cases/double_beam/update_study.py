@@ -80,6 +80,10 @@ class UpdateSettings:
 def load_levels(settings: UpdateSettings):
     """The measured levels, the fit mask and the noise model."""
     data = read_measured(settings.data_path or DEFAULT_DATA).for_mode(settings.mode_label)
+    if data.test[0] != "stepped-sine":
+        raise ValueError(f"{data.source}: test = {data.test[0]}: update simulates the "
+                         "stepped-sine levels of the double beam at their force; fit "
+                         f"{data.test[0]} rows with `iwanfe estimate` or `iwanfe diagnose`")
     if len(data) < 5:
         raise ValueError(f"mode {settings.mode_label}: {len(data)} levels in the data, "
                          f"need at least 5")

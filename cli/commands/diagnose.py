@@ -103,7 +103,9 @@ def _g(v, spec=".3g"):
 
 def format_text(r: dict, source: str) -> str:
     """Human-readable summary of a diagnosis."""
-    lines = [f"{source}: mode {r['mode']} ({r['control']} control, "
+    kind = (f"{r['control']} control" if r.get("test", "stepped-sine") == "stepped-sine"
+            else f"{r['test']} test")
+    lines = [f"{source}: mode {r['mode']} ({kind}, "
              f"{len(r['levels']['level'])} levels)",
              f"cause: {r['cause']}" + (f"   also: {', '.join(r['also'])}" if r["also"] else "")
              + f"   ambiguous: {'yes' if r['ambiguous'] else 'no'}",

@@ -134,12 +134,19 @@ def format_table(est, source: str = "") -> str:
     ci = est.chi_interval
     ki = est.kappa1_B_interval
     lines.append(f"  chi          = {est.chi:.5f}   ({c:.0%} interval {ci[0]:.3f} .. {ci[1]:.3f})")
-    at = (f"response amplitude {est.reference_amplitude:g}, held; force "
-          f"{est.reference_excitation:g}" if est.control == "response"
-          else f"excitation {est.reference_excitation:g}")
+    at = {"free-decay": f"envelope {est.reference_amplitude:g} along the decay",
+          "random": f"response RMS {est.reference_amplitude:g}, drive RMS "
+                    f"{est.reference_excitation:g}"}.get(est.test)
+    at = at or (f"response amplitude {est.reference_amplitude:g}, held; force "
+                f"{est.reference_excitation:g}" if est.control == "response"
+                else f"excitation {est.reference_excitation:g}")
     lines.append(f"  |kappa1| B   = {est.kappa1_B:.4g} 1/s^2   ({ki[0]:.3g} .. {ki[1]:.3g}), "
                  f"at level {est.reference_level} ({at})")
     lines.append(f"  kappa2/|kappa1| = {est.kappa2_over_kappa1:.4f} ({_kappa_label(est)})")
+    if est.rayleigh_factor is not None:
+        lines.append(f"  random test: Rayleigh factor c(chi) = {est.rayleigh_factor:.4f} "
+                     f"(calculated, inverse.random_amplitude); as a stepped sine at the "
+                     f"reference RMS |kappa1| B = {est.kappa1_B_sine:.4g} 1/s^2")
     if est.ratio_z is not None:
         lines.append(f"  eq. 35: z = {est.ratio_z:.4g}, slope chi+1 = {est.chi + 1:.5f}, "
                      f"intercept a0 = {est.intercept_a0:.4f}, residual std {est.residual_std:.3g} "

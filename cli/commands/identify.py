@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from cli import validate
+from cli.commands.identify_decay import run_free_decay
+from ident.time_records import is_time_record
 from ident.poles import mac
 from ident.series import identify_series, read_series_sets
 from ident.series_table import series_table
@@ -33,6 +35,10 @@ def register(subparsers) -> None:
         NAME,
         help="modal parameters (frequency, damping, shape) from FRF files (CSV, UFF 58)",
         description=(
+            "A free-decay time record (CSV time_s,<point>... with '# test = free-decay', "
+            "or UFF 58 time data) gives frequency and damping against amplitude along "
+            "the decay instead (Hilbert envelope and phase, checked by peaks and zero "
+            "crossings; docs/free-decay-and-random.md). "
             "Identify the modes of FRF sets (one reference, one or more response points) "
             "by LSCF with automatic selection of the stable poles and residual-corrected "
             "refinement (ident.identify). One FILE per excitation level; with several "
@@ -109,8 +115,10 @@ def _check_args(args, sets) -> None:
 def run(args) -> int:
     files = list(args.files)
     check_series_args(args)
+    if any(is_time_record(f) for f in files):
+        return run_free_decay(args)
     sets = read_series_sets(files, args.excitation, args.control, args.run_order,
-                            args.reference)
+                            args.reference, args.test)
     _check_args(args, sets)
     options = dict(max_order=args.max_order, weighting=args.weighting,
                    pseudo_modes=args.pseudo_modes)
@@ -153,8 +161,9 @@ def run(args) -> int:
 
 
 def _print_levels(table):
-    held = "response_amplitude" if table.response_controlled else "excitation"
-    print(f"\nmodes across levels (control {table.control[0]}; levels by {held}; "
+    held = "response_amplitude" if table.response_abscissa else "excitation"
+    test = "" if table.test[0] == "stepped-sine" else f"test {table.test[0]}, "
+    print(f"\nmodes across levels ({test}control {table.control[0]}; levels by {held}; "
           "std = the identification's standard uncertainty; MAC with the level below):")
     print(f"  {'level':>5} {'excitation':>11} {'response':>11} {'mode':>4} {'frequency_hz':>12}"
           f" {'std_hz':>8} {'zeta':>9} {'std':>8} {'fit_err%':>8} {'MAC':>6}")
@@ -220,6 +229,7 @@ def _as_json(files, fits, table):
             return None if a is None else a[i]
 
         out["control"] = str(table.control[0])
+        out["test"] = str(table.test[0])
         out["levels"] = [{"level": table.level[i], "excitation": table.excitation[i],
                           "response_amplitude": opt(table.response_amplitude, i),
                           "mode": table.mode[i], "omega2": table.omega2[i],
