@@ -1,8 +1,8 @@
 """First-harmonic balance of many force levels at once: steady states and phase resonance.
 
 The condensed first-harmonic equations of :mod:`fe.harmonic_balance` and
-:mod:`fe.hb_exact` (continuous Iwan joints through their exact describing function,
-:func:`fe.hb_exact.iwan_describing`), solved for all force levels of a stepped-sine campaign
+:mod:`fe.hb_exact` (any joint law through its describing function,
+:mod:`joints.law`; continuous Iwan joints for Iwan parameters), solved for all force levels of a stepped-sine campaign
 in one vectorized Newton iteration, on a reduced model in modal form (``M = I``, ``K``
 and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds it), where
 ``D(w) = diag(a k_r - w^2 + i w c_r)`` is inverted element by element. Besides the
@@ -32,8 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fe.hb_exact import ExactIwanJoints, iwan_describing
 from fe.reduction import ReducedModel
+from joints.describing import as_joint_law
+from joints.law import describing_force
 
 __all__ = ["CubicSpring", "QuadraticDamper", "ResonanceLevels", "resonance_levels",
            "frf_levels"]
@@ -105,7 +106,7 @@ class _Balance:
             raise ValueError("the batched first-harmonic balance needs a reduced model in "
                              "modal form (M = I, K and C diagonal): fe.reduction.ritz_basis")
         self.k, self.c = np.diag(K).copy(), np.diag(C).copy()
-        self.J = joints if isinstance(joints, ExactIwanJoints) else ExactIwanJoints(joints, model.n_joints)
+        self.J = as_joint_law(joints, model.n_joints)
         if np.any(np.abs(self.J.K_T - model.K_T) > 1e-9 * np.abs(model.K_T)):
             raise ValueError("joint stiffness does not match the model's K_T")
         self.elements = list(elements)
@@ -135,7 +136,7 @@ class _Balance:
         A = np.maximum(np.abs(Y), 1e-300)
         nj = self.nj
         kin, kq, dkin, dkq = (np.empty_like(A) for _ in range(4))
-        ki, qj, dki, dqj = iwan_describing(self.J, A[:, :nj])        # broadcasts over levels
+        ki, qj, dki, dqj = self.J.describing_derivative(A[:, :nj])   # broadcasts over levels
         a = self.a[:, None]
         kin[:, :nj] = a * (ki - self.J.K_T)
         kq[:, :nj] = a * qj
@@ -147,9 +148,7 @@ class _Balance:
             kin[:, c:c + n], kq[:, c:c + n], dkin[:, c:c + n], dkq[:, c:c + n] = \
                 e.df(A[:, c:c + n], omega)
             c += n
-        kap = kin + 1j * kq
-        dkap = (dkin + 1j * dkq) / A
-        return kap * Y, kap + Y * dkap * Y.real, 1j * kap + Y * dkap * Y.imag
+        return describing_force(kin + 1j * kq, dkin + 1j * dkq, Y, A)
 
     def residual(self, Y, R, Ylin, omega):
         N, dx, dy = self.force(Y, omega)
@@ -209,7 +208,8 @@ def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
     ----------
     model : ReducedModel
         Modal form (:func:`fe.reduction.ritz_basis`).
-    joints : IwanParameters or sequence of them (one per joint; ``K_T`` = ``model.K_T``).
+    joints : joints.law.JointLaw, or IwanParameters (one per joint or one shared);
+        ``K_T`` = ``model.K_T``.
     load : (r,) reduced unit load ``Phi^T f`` (real).
     forces : (L,) force amplitudes (N).
     mode_index : int

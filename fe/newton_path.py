@@ -55,7 +55,8 @@ class SteadyStateError(RuntimeError):
 
 
 def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
-                  scale: float):
+                  scale: float, relative_update: Callable | None = None,
+                  admissible: Callable | None = None):
     """Newton's method with an Armijo line search on ``|r|^2/2`` (module docstring).
 
     Parameters
@@ -69,6 +70,13 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
         Newton iterations (each one Jacobian factorization).
     scale : float
         Magnitude of ``y`` (> 0) below which ``max |y|`` is not used to normalize.
+    relative_update : callable, optional
+        ``relative_update(y_new, d) -> float``, the size of the full step ``d`` that
+        lands at ``y_new`` compared with ``tol`` (default ``max |d| / max(max |y_new|,
+        1e-12 scale)``), for unknowns of mixed units.
+    admissible : callable, optional
+        ``admissible(y) -> bool``: trial points outside the domain (e.g. a frequency
+        <= 0) are treated as a failed decrease and the step is halved.
 
     Returns
     -------
@@ -91,15 +99,21 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
             d = np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
             raise SteadyStateError("", f"singular Jacobian after {it - 1} iterations") from None
-        upd = float(np.abs(d).max() / max(np.abs(y + d).max(), floor))
+        upd = (float(np.abs(d).max() / max(np.abs(y + d).max(), floor))
+               if relative_update is None else float(relative_update(y + d, d)))
+        if not np.isfinite(upd):
+            raise SteadyStateError("", f"non-finite Newton step after {it - 1} iterations")
         if upd < tol:
             return y + d, it, upd, n_eval
         lam = 1.0
         while True:
             yt = y + lam * d
-            rt, Jt = evaluate(yt)
-            n_eval += 1
-            phit = 0.5 * float(rt @ rt)
+            if admissible is None or admissible(yt):
+                rt, Jt = evaluate(yt)
+                n_eval += 1
+                phit = 0.5 * float(rt @ rt)
+            else:
+                phit = np.inf
             if phit <= (1.0 - 2.0 * ARMIJO * lam) * phi:
                 break
             lam *= 0.5
@@ -198,21 +212,31 @@ def natural_continuation(solve, omegas, progress) -> list:
     return sols
 
 
+def _tag(solution, how: str):
+    """Record a fallback on a solution that has a ``fallback`` field (not silent)."""
+    if hasattr(solution, "fallback"):
+        solution.fallback = "; ".join(x for x in (how, solution.fallback) if x)
+    return solution
+
+
 def _recover(solve, w, hist, exc):
     """A line whose secant prediction failed: the previous solution as the guess, then
     the frequency step from the previous line halved until the corrector converges
     (:func:`fe.newton_path.follow`), then a fresh start from the stuck-joint solution
-    (``solve(w, None)``: the jump of a stepped-sine test when the branch ends)."""
+    (``solve(w, None)``: the jump of a stepped-sine test when the branch ends). The
+    route taken is recorded in the solution's ``fallback``."""
+    first = getattr(exc, "reason", str(exc))
     try:
-        return solve(w, hist[-1][1].slip)
+        return _tag(solve(w, hist[-1][1].slip), f"previous line as the guess ({first})")
     except RuntimeError:
         pass
     try:
-        return follow(solve, hist, w, _secant, max_halvings=FREQUENCY_HALVINGS)[0]
+        return _tag(follow(solve, hist, w, _secant, max_halvings=FREQUENCY_HALVINGS)[0],
+                    f"frequency step from the previous line halved ({first})")
     except RuntimeError:
         pass
     try:
-        return solve(w, None)
+        return _tag(solve(w, None), f"fresh start from the stuck-joint solution ({first})")
     except RuntimeError as fresh:
         reason = getattr(exc, "reason", str(exc))
         df = abs(w - hist[-1][0]) / (2 * np.pi) * 2.0 ** -FREQUENCY_HALVINGS
