@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fe.newton_path import ARMIJO, MIN_DAMPING, ROUNDOFF, SteadyStateError
 from fe.reduction import ReducedModel
 from joints.describing import as_joint_law
 from joints.law import describing_force
@@ -155,9 +156,10 @@ class _Balance:
         return Y - Ylin + np.einsum("lij,lj->li", R, N), N, dx, dy
 
     def solve(self, omega, Y, tol, max_iter):
-        """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), with backtracking where a
-        full step would raise the residual (deep macro-slip from a linear guess);
-        returns Y, N, Dinv, iterations."""
+        """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), globalized level by level
+        with the line search of :func:`fe.newton_path.damped_newton` (deep macro-slip
+        from a linear guess); returns Y, N, Dinv, iterations. Raises
+        :class:`fe.newton_path.SteadyStateError` where a level's line search stalls."""
         R, Ylin, Dinv = self.operator(omega)
         ny = self.ny
         eye = np.eye(ny)
@@ -174,13 +176,24 @@ class _Balance:
             step = d[:, :ny, 0] + 1j * d[:, ny:, 0]
             norm = np.linalg.norm(res, axis=1)
             lam = np.ones(self.L)
-            for _ in range(30):
+            # the line search of fe.newton_path.damped_newton, level by level: halve
+            # where the residual norm does not fall by ARMIJO lam; a residual already at
+            # round-off takes the full step; below MIN_DAMPING the level has stalled
+            floor = norm <= ROUNDOFF * np.abs(Y).max(axis=1)
+            while True:
                 Yt = Y + lam[:, None] * step
                 rt, Nt, dxt, dyt = self.residual(Yt, R, Ylin, omega)
-                bad = np.linalg.norm(rt, axis=1) > norm * (1.0 - 1e-4 * lam) + 1e-300
+                bad = np.linalg.norm(rt, axis=1) > norm * (1.0 - ARMIJO * lam) + 1e-300
                 bad &= np.abs(step).max(axis=1) > tol * np.abs(Y).max(axis=1)
+                bad &= ~(floor & (lam == 1.0))
                 if not bad.any():
                     break
+                if np.any(bad & (0.5 * lam < MIN_DAMPING)):
+                    raise SteadyStateError(
+                        f"{np.asarray(omega).max() / (2 * np.pi):.6g} Hz",
+                        f"line search stalled after {it} iterations at "
+                        f"{int(np.count_nonzero(bad))} of {self.L} levels",
+                        solver="first-harmonic balance")
                 lam = np.where(bad, 0.5 * lam, lam)
             Y, res, N, dx, dy = Yt, rt, Nt, dxt, dyt
             upd = np.abs(step).max(axis=1) / np.maximum(np.abs(Y).max(axis=1), 1e-12 * scale)

@@ -9,7 +9,12 @@ accepted once ``phi(y + lam d) <= (1 - 2 c lam) phi(y)``, halving ``lam`` from 1
 from the solution (deep macro-slip started from the stuck-joint guess) the full step
 overshoots by orders of magnitude; the line search keeps every iterate at a lower
 residual. Near the solution the full step is always accepted, so the iterates (and the
-converged numbers) are those of the undamped method.
+converged numbers) are those of the undamped method; once the residual is at round-off
+(below ``ROUNDOFF`` of ``max |y|``) the decrease test means nothing and the full step is
+taken too. Every solver of a steady state uses this one Newton (harmonic balance,
+:mod:`fe.hb_exact`, :mod:`fe.epmc`, :mod:`runs.response_control`); the batched
+first-harmonic balance of many levels (:mod:`fe.hb_resonance`) applies the same rule
+level by level.
 
 :func:`follow` carries a converged solution along a scalar parameter ``p`` (frequency
 between two lines, or a load factor) with a secant predictor, halving the step when a
@@ -31,6 +36,9 @@ __all__ = ["SteadyStateError", "damped_newton", "follow", "natural_continuation"
 ARMIJO = 1e-4
 #: Smallest line-search factor tried before the step is declared stalled.
 MIN_DAMPING = 2.0 ** -12
+#: Residual (relative to ``max |y|``) below which the sufficient-decrease test is
+#: round-off and the full Newton step is taken (as the undamped method does).
+ROUNDOFF = 64 * np.finfo(float).eps
 #: Halvings of the frequency step between two lines before a line is given up.
 FREQUENCY_HALVINGS = 8
 
@@ -106,6 +114,7 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
         if upd < tol:
             return y + d, it, upd, n_eval
         lam = 1.0
+        roundoff = 0.5 * (ROUNDOFF * max(np.abs(y).max(), floor)) ** 2
         while True:
             yt = y + lam * d
             if admissible is None or admissible(yt):
@@ -116,6 +125,8 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
                 phit = np.inf
             if phit <= (1.0 - 2.0 * ARMIJO * lam) * phi:
                 break
+            if lam == 1.0 and np.isfinite(phit) and phi <= roundoff:
+                break       # residual at round-off: no decrease to test, full step
             lam *= 0.5
             if lam < MIN_DAMPING:
                 raise SteadyStateError(

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy import special
 
+from joints.describing import slider_in_phase
 from joints.iwan import IwanParameters
 from joints.jenkins import discretize, discretize_log, jenkins_update
 from joints.law import JointLaw
@@ -142,15 +142,14 @@ class JointBank(JointLaw):
 
     def describing_derivative(self, amplitude):
         """Exact first harmonic of the bank (sum over its sliders of the Jenkins element's
-        describing function, :func:`joints.describing.iwan_describing` without the
-        density): a slider ``(k, phi)`` with ``r = phi/A < 1`` gives ``k_in = k
+        describing function :func:`joints.describing.slider_in_phase`): a slider ``(k, phi)`` with ``r = phi/A < 1`` gives ``k_in = k
         I_r(3/2, 3/2)`` and ``k_q = 4 k phi (A - phi)/(pi A^2)``, a stuck one ``k``
         and 0; derivatives with ``dI_r/dr = (8/pi) sqrt(r (1-r))``, ``dr/dA = -r/A``."""
         A = np.maximum(np.asarray(amplitude, dtype=float), 1e-300)[..., None]
         k, phi = self.stiffness, self.slip_limit
         r = np.minimum(phi / A, 1.0)
         slips = phi < A
-        g = special.betainc(1.5, 1.5, r)
+        g = slider_in_phase(r)
         dg = (8.0 / np.pi) * np.sqrt(r * (1.0 - r)) * (-r / A)
         q = np.where(slips, 4.0 * k * phi * (A - phi) / (np.pi * A * A), 0.0)
         dq = np.where(slips, 4.0 * k * phi * (2.0 * phi - A) / (np.pi * A ** 3), 0.0)

@@ -21,11 +21,12 @@ from scipy import special
 from joints.iwan import IWAN_VIRGIN, IwanParameters, masing_step
 from joints.law import JointLaw
 
-__all__ = ["describing_function", "IwanJoints", "as_joint_law", "iwan_describing", "kappa1",
+__all__ = ["describing_function", "IwanJoints", "as_joint_law", "iwan_describing",
+           "slider_in_phase", "kappa1",
            "kappa2_exact", "kappa2_paper"]
 
 
-def _slider_in_phase(r):
+def slider_in_phase(r):
     """In-phase describing function of one unit Jenkins element, ``r = phi/A``.
 
     ``g = (psi - sin(psi) cos(psi))/pi`` with ``cos(psi) = 1 - 2r`` for ``r < 1`` and
@@ -140,7 +141,7 @@ def iwan_describing(J: IwanJoints, A):
 
     Summing the describing function ``g(phi/A)`` of each slider over the density and
     integrating by parts (``dg/dr = (8/pi) sqrt(r (1-r))``, so ``g = I_r(3/2, 3/2)``,
-    :func:`_slider_in_phase`) gives, with ``rho = min(1, phi_max/A)`` and
+    :func:`slider_in_phase`) gives, with ``rho = min(1, phi_max/A)`` and
     ``B(x; a, b)`` the incomplete Beta function (derived here; not in the paper),
 
         k_in = K_T I_rho(3/2, 3/2) - c A**(chi+1) B(rho; chi+5/2, 3/2),
@@ -164,7 +165,7 @@ def iwan_describing(J: IwanJoints, A):
         return k_in, k_q, (chi + 1.0) * (k_in - J.K_T) / A, (chi + 1.0) * k_q / A
     rho = np.where(macro, pm / A, 1.0)
     inc = special.betainc(J.a, 1.5, rho) * J.beta_ab
-    g = _slider_in_phase(rho)
+    g = slider_in_phase(rho)
     Apow = A ** (chi + 1.0)
     k_in = J.K_T * g - J.c_in * Apow * inc
     a = np.minimum(A, pm)
