@@ -192,8 +192,8 @@ class NewmarkIntegrator:
     bank : joints.law.JointLaw
         The joints; ``bank.K_T`` must equal ``model.K_T``. A Jenkins bank
         (:class:`joints.bank.JointBank`) runs the compiled step loop; any other law the
-        plain Python loop over its ``step`` (about 100x slower per step for one joint;
-        ``compiled`` is then ignored).
+        plain Python loop over its ``step`` (300-600x slower per step for one joint,
+        ``benchmarks/bench_joint_laws.py``; ``compiled`` is then ignored).
     settings : NewmarkSettings
     """
 
