@@ -81,7 +81,7 @@ class Backbone:
                    slip_amplitude=np.array([p[2] for p in points]),
                    basis=np.asarray(model.basis), mass=np.asarray(model.M),
                    iterations=np.array([p[3] for p in points]),
-                   fallbacks=np.array([p[4] if len(p) > 4 else 0 for p in points]))
+                   fallbacks=np.array([p[4] for p in points]))
 
     def __len__(self) -> int:
         return int(self.amplitude.size)

@@ -1,10 +1,11 @@
 """First-harmonic balance of many force levels at once: steady states and phase resonance.
 
 The condensed first-harmonic equations of :mod:`fe.harmonic_balance` and
-:mod:`fe.hb_exact` (any joint law through its describing function,
-:mod:`joints.law`; continuous Iwan joints for Iwan parameters), solved for all force levels of a stepped-sine campaign
-in one vectorized Newton iteration, on a reduced model in modal form (``M = I``, ``K``
-and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds it), where
+:mod:`fe.hb_exact` (any joint law through its describing function, :mod:`joints.law`;
+continuous Iwan joints for Iwan parameters), solved for all force levels of a
+stepped-sine campaign in one vectorized Newton iteration, on a reduced model in modal
+form (``M = I``, ``K`` and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds
+it), where
 ``D(w) = diag(a k_r - w^2 + i w c_r)`` is inverted element by element. Besides the
 joints (slips ``S = G q``) the balance carries extra first-harmonic *elements* on
 reduced coordinates ``Z = H q`` (:class:`CubicSpring`, :class:`QuadraticDamper`), and a

@@ -141,10 +141,11 @@ class JointBank(JointLaw):
         return jenkins_update(slip, state, self.stiffness, self.slip_limit)
 
     def describing_derivative(self, amplitude):
-        """Exact first harmonic of the bank (sum over its sliders of the Jenkins element's
-        describing function :func:`joints.describing.slider_in_phase`): a slider ``(k, phi)`` with ``r = phi/A < 1`` gives ``k_in = k
-        I_r(3/2, 3/2)`` and ``k_q = 4 k phi (A - phi)/(pi A^2)``, a stuck one ``k``
-        and 0; derivatives with ``dI_r/dr = (8/pi) sqrt(r (1-r))``, ``dr/dA = -r/A``."""
+        """Exact first harmonic of the bank: the sum over its sliders of the Jenkins
+        element's describing function (:func:`joints.describing.slider_in_phase`). A
+        slider ``(k, phi)`` with ``r = phi/A < 1`` gives ``k_in = k I_r(3/2, 3/2)`` and
+        ``k_q = 4 k phi (A - phi)/(pi A^2)``, a stuck one ``k`` and 0; derivatives with
+        ``dI_r/dr = (8/pi) sqrt(r (1-r))``, ``dr/dA = -r/A``."""
         A = np.maximum(np.asarray(amplitude, dtype=float), 1e-300)[..., None]
         k, phi = self.stiffness, self.slip_limit
         r = np.minimum(phi / A, 1.0)

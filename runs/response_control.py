@@ -14,12 +14,13 @@ load pattern) gets one more unknown, ``F``, and one more equation,
     |X_d|^2 = A^2,   X_d = F x_d^lin - (D_1^{-1} G^T)_d G_1(S),
 
 solved together by the globalized Newton of :func:`fe.newton_path.damped_newton` with
-the exact Jacobian (the joints through either path of :mod:`fe.joint_harmonics`). Lines are followed by the secant continuation of
-:func:`fe.harmonic_balance.natural_continuation`. :class:`ResponseControlProtocol` plugs
-this into :func:`runs.stepped_sine.run_campaign` (store, resume, executors): the
-campaign's ``force`` column holds the held amplitudes (m), the level's receptance is
-``X / F`` per line, and the force of each line is ``A / |receptance at d|``
-(:func:`line_forces`).
+the exact Jacobian (the joints through either path of :mod:`fe.joint_harmonics`: any
+joint law by its describing function, or Jenkins banks by AFT). Lines are followed by
+the secant continuation of :func:`fe.harmonic_balance.natural_continuation`.
+:class:`ResponseControlProtocol` plugs this into :func:`runs.stepped_sine.run_campaign`
+(store, resume, executors): the campaign's ``force`` column holds the held amplitudes
+(m), the level's receptance is ``X / F`` per line, and the force of each line is
+``A / |receptance at d|`` (:func:`line_forces`).
 
 SI units: rad/s, m, N.
 """
