@@ -1,12 +1,14 @@
-"""First-harmonic balance with the exact continuous Iwan joints (describing function).
+"""First-harmonic balance with any joint law through its describing function.
 
 :func:`solve_hb_exact` solves the condensed harmonic-balance equations of
-:mod:`fe.harmonic_balance` with one harmonic and *continuous* Iwan joints: with one
-harmonic the slips are sinusoids and the joint force harmonic is exactly the describing
-function of :func:`joints.describing.describing_function`
-(``F_1 = (k_in(A) + i k_q(A)) S_1``), so there is neither a slider discretization nor
-time sampling; Newton uses the analytic derivative of the describing function
-(:func:`iwan_describing`). :func:`continuation_exact` follows it over frequency lines.
+:mod:`fe.harmonic_balance` with one harmonic: the slips are sinusoids and the joint
+force harmonic is exactly the law's describing function
+(``F_1 = (k_in(A) + i k_q(A)) S_1``, :mod:`joints.law`; for Iwan parameters the exact
+continuous Iwan joints of :func:`joints.describing.iwan_describing`), so there is
+neither a slider discretization nor time sampling. Newton
+(:func:`fe.newton_path.damped_newton`) uses the derivative of the describing function
+through :func:`joints.law.describing_force`. :func:`continuation_exact` follows it over
+frequency lines.
 
 SI units: rad/s, m, N.
 """
@@ -26,17 +28,16 @@ __all__ = ["solve_hb_exact", "continuation_exact", "ExactIwanJoints", "iwan_desc
 
 def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float = 1e-13,
                    max_iter: int = 60, guess: np.ndarray | None = None,
-                   _prepared: ExactIwanJoints | None = None) -> HBSolution:
-    """First-harmonic balance with the exact continuous Iwan joints (describing function).
+                   _prepared=None) -> HBSolution:
+    """First-harmonic balance with a joint law's describing function (module docstring).
 
     With one harmonic every joint slip is a sinusoid ``s_j = Re(S_j e^{i w t})`` and the
     first harmonic of the joint force is exactly
-    ``F_j = (k_in(|S_j|) + i k_q(|S_j|)) S_j`` (:func:`joints.describing.describing_function`;
-    paper eq. 14 in micro-slip), so ``g_j = F_j - K_T S_j`` and the condensed equations
-    ``S = S_lin - R_1 N(S)`` (module docstring) are solved by Newton's method with the
-    analytic derivative of the describing function (:func:`iwan_describing`). No slider
-    discretization and no time sampling: the only error is the truncation to the first
-    harmonic.
+    ``F_j = (k_in(|S_j|) + i k_q(|S_j|)) S_j`` (the law's describing function; for Iwan
+    joints paper eq. 14 in micro-slip), so ``g_j = F_j - K_T S_j`` and the condensed
+    equations ``S = S_lin - R_1 N(S)`` (module docstring) are solved by Newton's method
+    with the derivative of the describing function. No slider discretization and no
+    time sampling: the only error is the truncation to the first harmonic.
 
     Parameters
     ----------
