@@ -153,8 +153,12 @@ class _Balance:
         return describing_force(kin + 1j * kq, dkin + 1j * dkq, Y, A)
 
     def residual(self, Y, R, Ylin, omega):
+        """Residual of (1), ``N`` and its derivatives, and the size of the residual's
+        largest term per level (its round-off scale)."""
         N, dx, dy = self.force(Y, omega)
-        return Y - Ylin + np.einsum("lij,lj->li", R, N), N, dx, dy
+        RN = np.einsum("lij,lj->li", R, N)
+        size = np.maximum(np.abs(Y).max(axis=1), np.abs(RN).max(axis=1))
+        return Y - Ylin + RN, N, dx, dy, size
 
     def solve(self, omega, Y, tol, max_iter):
         """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), globalized level by level
@@ -166,7 +170,7 @@ class _Balance:
         eye = np.eye(ny)
         Jac = np.empty((self.L, 2 * ny, 2 * ny))
         scale = np.maximum(np.abs(Ylin).max(axis=1), 1e-300)
-        res, N, dx, dy = self.residual(Y, R, Ylin, omega)
+        res, N, dx, dy, size = self.residual(Y, R, Ylin, omega)
         for it in range(1, max_iter + 1):
             Ra, Rb = R * dx[:, None, :], R * dy[:, None, :]
             Jac[:, :ny, :ny] = eye + Ra.real
@@ -179,11 +183,12 @@ class _Balance:
             lam = np.ones(self.L)
             # the line search of fe.newton_path.damped_newton, level by level: halve
             # where the residual norm does not fall by ARMIJO lam; a residual already at
-            # round-off takes the full step; below MIN_DAMPING the level has stalled
-            floor = norm <= ROUNDOFF * np.abs(Y).max(axis=1)
+            # round-off of its largest term takes the full step; below MIN_DAMPING the
+            # level has stalled
+            floor = norm <= ROUNDOFF * np.sqrt(ny) * size
             while True:
                 Yt = Y + lam[:, None] * step
-                rt, Nt, dxt, dyt = self.residual(Yt, R, Ylin, omega)
+                rt, Nt, dxt, dyt, st = self.residual(Yt, R, Ylin, omega)
                 bad = np.linalg.norm(rt, axis=1) > norm * (1.0 - ARMIJO * lam) + 1e-300
                 bad &= np.abs(step).max(axis=1) > tol * np.abs(Y).max(axis=1)
                 bad &= ~(floor & (lam == 1.0))
@@ -196,11 +201,11 @@ class _Balance:
                         f"{int(np.count_nonzero(bad))} of {self.L} levels",
                         solver="first-harmonic balance")
                 lam = np.where(bad, 0.5 * lam, lam)
-            Y, res, N, dx, dy = Yt, rt, Nt, dxt, dyt
+            Y, res, N, dx, dy, size = Yt, rt, Nt, dxt, dyt, st
             upd = np.abs(step).max(axis=1) / np.maximum(np.abs(Y).max(axis=1), 1e-12 * scale)
             # converged: the full Newton step is negligible, or within 100 tol and no
             # step along it lowers the residual any more (round-off floor)
-            if np.all((upd < tol) | ((upd < 100.0 * tol) & (lam < 1.0))):
+            if np.all((upd < tol) | ((upd < 100.0 * tol) & ((lam < 1.0) | floor))):
                 return Y, N, Dinv, it
         raise RuntimeError(f"first-harmonic balance did not converge at "
                            f"{np.asarray(omega).max() / (2 * np.pi):.4g} Hz (relative update "

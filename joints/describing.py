@@ -62,7 +62,7 @@ def describing_function(p: IwanParameters, amplitude):
     A = np.asarray(amplitude, dtype=float)
     if np.any(~(A > 0.0)) or np.any(~np.isfinite(A)):
         raise ValueError("slip amplitude must be finite and > 0")
-    k_in, k_quad, _, _ = iwan_describing(IwanJoints(p, 1), A[..., None])
+    k_in, k_quad, _, _ = iwan_describing(IwanJoints(p, 1), A[..., None], False)
     k_in, k_quad = k_in[..., 0], k_quad[..., 0]
     if k_in.ndim == 0:
         return float(k_in), float(k_quad)
@@ -134,7 +134,7 @@ def as_joint_law(joints, n_joints: int) -> JointLaw:
     return IwanJoints(joints, int(n_joints))
 
 
-def iwan_describing(J: IwanJoints, A):
+def iwan_describing(J: IwanJoints, A, micro_shortcut: bool = True):
     """Exact describing function of each joint at slip amplitudes ``A`` (broadcast
     against ``(n_joints,)``) and its derivative in ``A``:
     ``(k_in, k_q, dk_in/dA, dk_q/dA)`` (N/m, N/m^2).
@@ -158,7 +158,7 @@ def iwan_describing(J: IwanJoints, A):
     chi, pm = J.chi, J.phi_max
     A = np.maximum(np.asarray(A, dtype=float), 1e-300)
     macro = A > pm
-    if not macro.any():            # micro-slip everywhere: rho = 1, closed forms
+    if micro_shortcut and not macro.any():   # micro-slip everywhere: rho = 1
         Apow = A ** (chi + 1.0)
         k_in = J.K_T - J.c_in * J.beta_ab * Apow
         k_q = J.q_micro * Apow
