@@ -153,7 +153,10 @@ def iwan_describing(J: IwanJoints, A, micro_shortcut: bool = True):
     A**(chi+1)`` in micro-slip). Derivatives: ``dD/dA = 4 R a^(chi+2)/(chi+2) + 4 S
     phi_max [A > phi_max]`` (``a = min(A, phi_max)``), ``d rho/dA = -rho/A`` in
     macro-slip, ``d I_rho(3/2,3/2)/d rho = (8/pi) sqrt(rho (1-rho))``,
-    ``d B(rho; a, 3/2)/d rho = rho^(a-1) sqrt(1-rho)``.
+    ``d B(rho; a, 3/2)/d rho = rho^(a-1) sqrt(1-rho)``. With ``micro_shortcut`` (the
+    solvers' default) a call whose amplitudes are all in micro-slip uses the closed
+    forms at ``rho = 1`` (no incomplete Beta functions; equal to rounding);
+    :func:`describing_function` evaluates the general form everywhere.
     """
     chi, pm = J.chi, J.phi_max
     A = np.maximum(np.asarray(A, dtype=float), 1e-300)
