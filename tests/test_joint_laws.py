@@ -15,14 +15,14 @@ from fe.reduction import JointBank
 from joints.bouc_wen import BoucWenJoints, BoucWenParameters
 from joints.describing import IwanJoints
 from joints.iwan import IwanParameters, force_history
+from joints.jenkins import discretize
 from joints.law import JointLaw
 
 IWAN = [IwanParameters(chi=-0.4, K_T=5e4, F_S=30.0, beta=0.8),
         IwanParameters(chi=-0.7, K_T=2e5, F_S=90.0, beta=0.0)]
 LAWS = {
     "iwan": lambda: IwanJoints(IWAN),
-    "jenkins": lambda: JointBank.from_discretizations(
-        [__import__("joints.jenkins", fromlist=["discretize"]).discretize(p, 40) for p in IWAN]),
+    "jenkins": lambda: JointBank.from_discretizations([discretize(p, 40) for p in IWAN]),
     "bouc-wen": lambda: BoucWenJoints([BoucWenParameters(5e4, 30.0, 0.1, 0.5),
                                        BoucWenParameters(2e5, 90.0, 0.0, 1.0)]),
 }
@@ -136,7 +136,6 @@ def test_newmark_with_the_exact_iwan_step_converges_to_the_bank():
     (plain loop) against Newmark through Jenkins banks of 50 and 400 sliders (compiled):
     the bank's error falls with the sliders toward the exact step's response."""
     from fe.newmark import NewmarkSettings, integrate
-    from joints.jenkins import discretize
     p = IWAN[0]
     model = sdof(p.K_T, 1.0, 5.0)
     w = 0.95 * np.sqrt(p.K_T)
@@ -155,8 +154,7 @@ def test_bank_through_its_describing_function_is_the_one_harmonic_aft_balance():
     AFT path with one harmonic (BankHarmonics) give the same EPMC backbone."""
     from fe.epmc import epmc_backbone
     from fe.joint_harmonics import BankHarmonics, ExactHarmonics
-    bank = JointBank.from_discretizations(
-        [__import__("joints.jenkins", fromlist=["discretize"]).discretize(IWAN[0], 40)])
+    bank = JointBank.from_discretizations([discretize(IWAN[0], 40)])
     model = sdof(IWAN[0].K_T, 2.0, 0.0)
     A = np.geomspace(0.05, 3.0, 6) * IWAN[0].phi_max
     df = epmc_backbone(model, ExactHarmonics(bank), 1, A)
