@@ -47,6 +47,9 @@ class Backbone:
     basis : (n_dof, r) the reduced basis (physical shapes ``basis @ q``).
     mass : (r, r) the reduced mass.
     iterations : (n,) Newton iterations of the last solve of each point.
+    fallbacks : (n,) solves of each point that needed a fallback: a restart from the
+        previous point after the predictor failed, or a halved amplitude step (0: the
+        predictor converged at once).
     """
 
     mode: int
@@ -62,10 +65,11 @@ class Backbone:
     basis: np.ndarray
     mass: np.ndarray
     iterations: np.ndarray
+    fallbacks: np.ndarray | None = None
 
     @classmethod
     def from_solutions(cls, model, joints, mode, at, L, phi, omega0, points) -> "Backbone":
-        """From ``(a, z, slip, iterations)`` tuples of :mod:`fe.epmc`."""
+        """From ``(a, z, slip, iterations, fallbacks)`` tuples of :mod:`fe.epmc`."""
         r, nc = model.n_reduced, joints.nc
         a = np.array([p[0] for p in points])
         Z = np.array([p[1] for p in points])
@@ -76,7 +80,8 @@ class Backbone:
                    harmonics=np.asarray(joints.harmonics), q=q,
                    slip_amplitude=np.array([p[2] for p in points]),
                    basis=np.asarray(model.basis), mass=np.asarray(model.M),
-                   iterations=np.array([p[3] for p in points]))
+                   iterations=np.array([p[3] for p in points]),
+                   fallbacks=np.array([p[4] for p in points]))
 
     def __len__(self) -> int:
         return int(self.amplitude.size)

@@ -39,6 +39,7 @@ import numpy as np
 import scipy.linalg as la
 
 from fe.backbone import Backbone
+from fe.newton_path import SteadyStateError, damped_newton
 from fe.reduction import ReducedModel
 
 __all__ = ["linear_mode", "amplitude_functional", "solve_epmc", "epmc_backbone"]
@@ -125,22 +126,21 @@ class _EPMCSystem:
         return res, Jac, amp
 
     def newton(self, z, a, tol, max_iter):
+        """:func:`fe.newton_path.damped_newton` at amplitude ``a`` from ``z``: ``(z, it,
+        upd)``, or ``(None, max_iter, inf)`` when it fails (the reason in ``self.failure``)."""
         m = self.m
-        upd = np.inf
-        for it in range(1, max_iter + 1):
-            res, Jac, _ = self.evaluate(z, a)
-            try:
-                dz = la.solve(Jac, -res, check_finite=True)
-            except (la.LinAlgError, ValueError):
-                return None, it, np.inf
-            z = z + dz
-            upd = max(np.abs(dz[:m]).max() / max(np.abs(z[:m]).max(), 1e-300),
-                      abs(dz[m]) / abs(z[m]), abs(dz[m + 1]) / abs(z[m]))
-            if not np.isfinite(upd) or z[m] <= 0:
-                return None, it, np.inf
-            if upd < tol:
-                return z, it, upd
-        return None, max_iter, upd
+
+        def relative_update(zn, dz):
+            return max(np.abs(dz[:m]).max() / max(np.abs(zn[:m]).max(), 1e-300),
+                       abs(dz[m]) / abs(zn[m]), abs(dz[m + 1]) / abs(zn[m]))
+
+        try:
+            return damped_newton(lambda x: self.evaluate(x, a)[:2], z, tol, max_iter, 1.0,
+                                 relative_update=relative_update,
+                                 admissible=lambda x: x[m] > 0)[:3]
+        except SteadyStateError as exc:
+            self.failure = exc.reason
+            return None, max_iter, np.inf
 
 
 def _start(model, joints, omega0, phi, L):
@@ -217,23 +217,26 @@ def epmc_backbone(model: ReducedModel, joints, mode: int, amplitudes, at="slip",
     for a in a_all:
         target = np.log(a)
         todo = [target]
+        fallbacks = 0
         while todo:
             lt = todo[-1]
             z, it, upd = system.newton(predict(lt), np.exp(lt), tol, max_iter)
             if z is None and hist:
+                fallbacks += 1          # restart from the last converged point
                 z, it, upd = system.newton(hist[-1][1], np.exp(lt), tol, max_iter)
             if z is None:
                 last = hist[-1][0] if hist else None
                 if last is None or len(todo) > max_halvings:
-                    raise RuntimeError(f"EPMC did not converge at amplitude {np.exp(lt):.4g} "
-                                       f"(mode {mode}, relative update {upd:.2e})")
+                    raise SteadyStateError(f"amplitude {np.exp(lt):.4g}",
+                                           f"{system.failure} (mode {mode})", solver="EPMC")
+                fallbacks += 1          # halve the step in log a
                 todo.append(0.5 * (last + lt))
                 continue
             hist.append((lt, z))
             todo.pop()
         Y = z[:system.m].reshape(system.nc, system.r)
         _, _, slip = joints(a * (Y @ model.G.T), jacobian=False)
-        points.append((a, z, slip, it))
+        points.append((a, z, slip, it, fallbacks))
         if progress is not None:
             progress.update(1)
     return Backbone.from_solutions(model, joints, mode, at, L, phi, omega0, points)

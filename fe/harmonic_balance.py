@@ -77,6 +77,9 @@ class HBSolution:
     q : (n_h, r) complex reduced displacement harmonics.
     slip_amplitude : (n_joints,) half peak-to-peak slip over the period (m).
     iterations : Newton iterations; residual : final relative update.
+    fallback : how the solution was reached when Newton from the first guess failed
+        (e.g. ``"load raised gradually from the stuck-joint solution"``; several joined
+        by ``"; "``), empty when it did not.
     """
 
     omega: float
@@ -87,6 +90,7 @@ class HBSolution:
     slip_amplitude: np.ndarray
     iterations: int
     residual: float
+    fallback: str = ""
 
     def first_harmonic(self, model: ReducedModel) -> np.ndarray:
         """Physical first-harmonic displacement ``Phi Q_1`` (n,), complex (m)."""
@@ -287,6 +291,10 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     fe.newton_path.SteadyStateError
         One line: the frequency and the reason.
     """
+    if not isinstance(bank, JointBank):
+        raise ValueError(f"the multi-harmonic balance (AFT) needs Jenkins banks; solve "
+                         f"{getattr(bank, 'name', 'this joint law')} joints through their "
+                         f"describing function (fe.hb_exact.solve_hb_exact)")
     check_joint_stiffness(bank.K_T, model)
     op = HBOperator(model, load, omega, settings)
     h = op.h
@@ -294,6 +302,7 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     scale = max(np.abs(op.y_lin).max(), 1e-300)
     where = f"{omega / (2 * np.pi):.6g} Hz"
     y0 = op.y_lin.copy() if guess is None else _to_real(np.asarray(guess), h).reshape(-1)
+    fallback = ""
     try:
         y, it, upd, _ = damped_newton(balance, y0, settings.tol, settings.max_iter, scale)
     except SteadyStateError as exc:
@@ -305,6 +314,7 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
             raise SteadyStateError(where, f"{exc2.reason}, also with the load raised "
                                           f"gradually from the stuck-joint solution") from None
         upd = 0.0
+        fallback = f"load raised gradually from the stuck-joint solution ({exc.reason})"
     nc, nj = op.nc, op.nj
     E, P = balance.E, balance.P
     Y = y.reshape(nc, nj)
@@ -317,7 +327,8 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     q[h == 1] += op.Xp[h == 1]
     amp = 0.5 * (s_t.max(axis=1) - s_t.min(axis=1))
     return HBSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Gh, q=q,
-                      slip_amplitude=amp, iterations=it, residual=float(upd))
+                      slip_amplitude=amp, iterations=it, residual=float(upd),
+                      fallback=fallback)
 
 
 def continuation(model: ReducedModel, bank: JointBank, load, omegas,

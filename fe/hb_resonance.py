@@ -1,10 +1,11 @@
 """First-harmonic balance of many force levels at once: steady states and phase resonance.
 
 The condensed first-harmonic equations of :mod:`fe.harmonic_balance` and
-:mod:`fe.hb_exact` (continuous Iwan joints through their exact describing function,
-:func:`fe.hb_exact.iwan_describing`), solved for all force levels of a stepped-sine campaign
-in one vectorized Newton iteration, on a reduced model in modal form (``M = I``, ``K``
-and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds it), where
+:mod:`fe.hb_exact` (any joint law through its describing function, :mod:`joints.law`;
+continuous Iwan joints for Iwan parameters), solved for all force levels of a
+stepped-sine campaign in one vectorized Newton iteration, on a reduced model in modal
+form (``M = I``, ``K`` and ``C`` diagonal, as :func:`fe.reduction.ritz_basis` builds
+it), where
 ``D(w) = diag(a k_r - w^2 + i w c_r)`` is inverted element by element. Besides the
 joints (slips ``S = G q``) the balance carries extra first-harmonic *elements* on
 reduced coordinates ``Z = H q`` (:class:`CubicSpring`, :class:`QuadraticDamper`), and a
@@ -32,8 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fe.hb_exact import ExactIwanJoints, iwan_describing
+from fe.newton_path import ARMIJO, MIN_DAMPING, ROUNDOFF, SteadyStateError
 from fe.reduction import ReducedModel
+from joints.describing import as_joint_law
+from joints.law import describing_force
 
 __all__ = ["CubicSpring", "QuadraticDamper", "ResonanceLevels", "resonance_levels",
            "frf_levels"]
@@ -105,7 +108,7 @@ class _Balance:
             raise ValueError("the batched first-harmonic balance needs a reduced model in "
                              "modal form (M = I, K and C diagonal): fe.reduction.ritz_basis")
         self.k, self.c = np.diag(K).copy(), np.diag(C).copy()
-        self.J = joints if isinstance(joints, ExactIwanJoints) else ExactIwanJoints(joints, model.n_joints)
+        self.J = as_joint_law(joints, model.n_joints)
         if np.any(np.abs(self.J.K_T - model.K_T) > 1e-9 * np.abs(model.K_T)):
             raise ValueError("joint stiffness does not match the model's K_T")
         self.elements = list(elements)
@@ -135,7 +138,7 @@ class _Balance:
         A = np.maximum(np.abs(Y), 1e-300)
         nj = self.nj
         kin, kq, dkin, dkq = (np.empty_like(A) for _ in range(4))
-        ki, qj, dki, dqj = iwan_describing(self.J, A[:, :nj])        # broadcasts over levels
+        ki, qj, dki, dqj = self.J.describing_derivative(A[:, :nj])   # broadcasts over levels
         a = self.a[:, None]
         kin[:, :nj] = a * (ki - self.J.K_T)
         kq[:, :nj] = a * qj
@@ -147,24 +150,27 @@ class _Balance:
             kin[:, c:c + n], kq[:, c:c + n], dkin[:, c:c + n], dkq[:, c:c + n] = \
                 e.df(A[:, c:c + n], omega)
             c += n
-        kap = kin + 1j * kq
-        dkap = (dkin + 1j * dkq) / A
-        return kap * Y, kap + Y * dkap * Y.real, 1j * kap + Y * dkap * Y.imag
+        return describing_force(kin + 1j * kq, dkin + 1j * dkq, Y, A)
 
     def residual(self, Y, R, Ylin, omega):
+        """Residual of (1), ``N`` and its derivatives, and the size of the residual's
+        largest term per level (its round-off scale)."""
         N, dx, dy = self.force(Y, omega)
-        return Y - Ylin + np.einsum("lij,lj->li", R, N), N, dx, dy
+        RN = np.einsum("lij,lj->li", R, N)
+        size = np.maximum(np.abs(Y).max(axis=1), np.abs(RN).max(axis=1))
+        return Y - Ylin + RN, N, dx, dy, size
 
     def solve(self, omega, Y, tol, max_iter):
-        """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), with backtracking where a
-        full step would raise the residual (deep macro-slip from a linear guess);
-        returns Y, N, Dinv, iterations."""
+        """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), globalized level by level
+        with the line search of :func:`fe.newton_path.damped_newton` (deep macro-slip
+        from a linear guess); returns Y, N, Dinv, iterations. Raises
+        :class:`fe.newton_path.SteadyStateError` where a level's line search stalls."""
         R, Ylin, Dinv = self.operator(omega)
         ny = self.ny
         eye = np.eye(ny)
         Jac = np.empty((self.L, 2 * ny, 2 * ny))
         scale = np.maximum(np.abs(Ylin).max(axis=1), 1e-300)
-        res, N, dx, dy = self.residual(Y, R, Ylin, omega)
+        res, N, dx, dy, size = self.residual(Y, R, Ylin, omega)
         for it in range(1, max_iter + 1):
             Ra, Rb = R * dx[:, None, :], R * dy[:, None, :]
             Jac[:, :ny, :ny] = eye + Ra.real
@@ -175,19 +181,31 @@ class _Balance:
             step = d[:, :ny, 0] + 1j * d[:, ny:, 0]
             norm = np.linalg.norm(res, axis=1)
             lam = np.ones(self.L)
-            for _ in range(30):
+            # the line search of fe.newton_path.damped_newton, level by level: halve
+            # where the residual norm does not fall by ARMIJO lam; a residual already at
+            # round-off of its largest term takes the full step; below MIN_DAMPING the
+            # level has stalled
+            floor = norm <= ROUNDOFF * np.sqrt(ny) * size
+            while True:
                 Yt = Y + lam[:, None] * step
-                rt, Nt, dxt, dyt = self.residual(Yt, R, Ylin, omega)
-                bad = np.linalg.norm(rt, axis=1) > norm * (1.0 - 1e-4 * lam) + 1e-300
+                rt, Nt, dxt, dyt, st = self.residual(Yt, R, Ylin, omega)
+                bad = np.linalg.norm(rt, axis=1) > norm * (1.0 - ARMIJO * lam) + 1e-300
                 bad &= np.abs(step).max(axis=1) > tol * np.abs(Y).max(axis=1)
+                bad &= ~(floor & (lam == 1.0))
                 if not bad.any():
                     break
+                if np.any(bad & (0.5 * lam < MIN_DAMPING)):
+                    raise SteadyStateError(
+                        f"{np.asarray(omega).max() / (2 * np.pi):.6g} Hz",
+                        f"line search stalled after {it} iterations at "
+                        f"{int(np.count_nonzero(bad))} of {self.L} levels",
+                        solver="first-harmonic balance")
                 lam = np.where(bad, 0.5 * lam, lam)
-            Y, res, N, dx, dy = Yt, rt, Nt, dxt, dyt
+            Y, res, N, dx, dy, size = Yt, rt, Nt, dxt, dyt, st
             upd = np.abs(step).max(axis=1) / np.maximum(np.abs(Y).max(axis=1), 1e-12 * scale)
             # converged: the full Newton step is negligible, or within 100 tol and no
             # step along it lowers the residual any more (round-off floor)
-            if np.all((upd < tol) | ((upd < 100.0 * tol) & (lam < 1.0))):
+            if np.all((upd < tol) | ((upd < 100.0 * tol) & ((lam < 1.0) | floor))):
                 return Y, N, Dinv, it
         raise RuntimeError(f"first-harmonic balance did not converge at "
                            f"{np.asarray(omega).max() / (2 * np.pi):.4g} Hz (relative update "
@@ -209,7 +227,8 @@ def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
     ----------
     model : ReducedModel
         Modal form (:func:`fe.reduction.ritz_basis`).
-    joints : IwanParameters or sequence of them (one per joint; ``K_T`` = ``model.K_T``).
+    joints : joints.law.JointLaw, or IwanParameters (one per joint or one shared);
+        ``K_T`` = ``model.K_T``.
     load : (r,) reduced unit load ``Phi^T f`` (real).
     forces : (L,) force amplitudes (N).
     mode_index : int

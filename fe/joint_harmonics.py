@@ -11,9 +11,9 @@ amplitudes. Two paths, each reusing the project's one implementation:
 * :class:`BankHarmonics`: Jenkins banks (:class:`fe.reduction.JointBank`) through the
   AFT march of :func:`fe.aft.aft_joint_force` (exact Jacobian of the sampled force),
   any set of harmonics;
-* :class:`ExactHarmonics`: continuous four-parameter Iwan joints, first harmonic only,
-  through the exact describing function and its analytic derivative
-  (:func:`fe.hb_exact.iwan_describing`): ``G_1 = (k_in(|S|) - K_T + i k_q(|S|)) S``.
+* :class:`ExactHarmonics`: any joint law (:mod:`joints.law`; the exact continuous
+  four-parameter Iwan joints for Iwan parameters), first harmonic only, through its
+  describing function and its derivative: ``G_1 = (k_in(|S|) - K_T + i k_q(|S|)) S``.
 
 Joints are independent: the Jacobian is block diagonal, one (n_c, n_c) block per joint.
 SI units: m, N.
@@ -24,9 +24,10 @@ import numpy as np
 
 from fe.aft import aft_joint_force
 from fe.harmonic_balance import harmonic_synthesis
-from fe.hb_exact import ExactIwanJoints, iwan_describing
 from fe.reduction import JointBank
+from joints.describing import as_joint_law
 from joints.iwan import IwanParameters
+from joints.law import describing_force
 
 __all__ = ["BankHarmonics", "ExactHarmonics", "joint_path"]
 
@@ -59,38 +60,34 @@ class BankHarmonics:
 
 
 class ExactHarmonics:
-    """Continuous Iwan joints (one :class:`joints.iwan.IwanParameters` per joint, or one
-    shared), first harmonic, exact describing function."""
+    """Any joint law (:class:`joints.law.JointLaw`; Iwan parameters, one per joint or one
+    shared, give the exact continuous Iwan joints), first harmonic, through its
+    describing function and the one Jacobian :func:`joints.law.describing_force`."""
 
     path = "exact"
     harmonics = np.array([1])
     nc = 2
 
-    def __init__(self, joints, n_joints: int):
-        self.iwan = ExactIwanJoints(joints, int(n_joints))
-        self.K_T = self.iwan.K_T
+    def __init__(self, joints, n_joints: int | None = None):
+        n = getattr(joints, "n_joints", None) if n_joints is None else n_joints
+        self.law = as_joint_law(joints, n)
+        self.K_T = self.law.K_T
 
     @property
     def parameters(self) -> list[IwanParameters]:
-        """The joints (rebuilt from the density parameters)."""
-        J = self.iwan
-        return [IwanParameters.from_density(R, c, pm, S)
-                for R, c, pm, S in zip(J.R, J.chi, J.phi_max, J.S)]
+        """The Iwan joints' parameters (Iwan laws only)."""
+        return list(self.law.params)
 
     def __call__(self, Y: np.ndarray, jacobian: bool = True):
         """As :meth:`BankHarmonics.__call__`; the amplitude is ``|S_1|``."""
         S = Y[0] + 1j * Y[1]
         A = np.abs(S)
-        k_in, k_q, dk_in, dk_q = iwan_describing(self.iwan, A)
-        kap = (k_in - self.K_T) + 1j * k_q
-        N = kap * S
+        k_in, k_q, dk_in, dk_q = self.law.describing_derivative(A)
+        N, d_re, d_im = describing_force((k_in - self.K_T) + 1j * k_q, dk_in + 1j * dk_q, S,
+                                         np.maximum(A, 1e-300))
         G = np.array([N.real, N.imag])
         if not jacobian:
             return G, None, A
-        # dN/dRe S = kap + S kap'(A) Re S / A,  dN/dIm S = i kap + S kap'(A) Im S / A
-        dkap = (dk_in + 1j * dk_q) / np.maximum(A, 1e-300)
-        d_re = kap + S * dkap * S.real
-        d_im = 1j * kap + S * dkap * S.imag
         J = np.empty((S.size, 2, 2))
         J[:, 0, 0], J[:, 0, 1] = d_re.real, d_im.real
         J[:, 1, 0], J[:, 1, 1] = d_re.imag, d_im.imag
@@ -100,7 +97,7 @@ class ExactHarmonics:
 def joint_path(path: str, bank: JointBank | None = None, joints=None, n_joints=None,
                harmonics=(1, 3, 5, 7), n_time: int = 256):
     """The joint harmonics of ``path``: ``"bank"`` (needs ``bank``) or ``"exact"`` (needs
-    ``joints`` and ``n_joints``)."""
+    ``joints``: a joint law, or Iwan parameters and ``n_joints``)."""
     if path == "bank":
         if bank is None:
             raise ValueError("the bank path needs a JointBank")

@@ -43,6 +43,7 @@ import numpy as np
 
 from fe.newmark_march import march, reference_loop
 from fe.reduction import JointBank, ReducedModel
+from joints.law import JointLaw
 
 __all__ = ["NewmarkSettings", "NewmarkState", "EnergyBalance", "NewmarkRun", "NewmarkIntegrator",
            "integrate"]
@@ -76,7 +77,8 @@ class NewmarkSettings:
 @dataclass
 class NewmarkState:
     """Committed state at time ``t``: reduced displacement ``q`` (m), velocity ``v``,
-    acceleration ``a``, slider anchors (m, shape (n_joints, n_sliders)), slip-induced
+    acceleration ``a``, the joint law's state ``anchor`` (a Jenkins bank's slider
+    anchors, m, shape (n_joints, n_sliders)), slip-induced
     joint force ``g`` (N) and the scalar excitation value ``e`` at ``t``."""
 
     t: float
@@ -88,11 +90,11 @@ class NewmarkState:
     e: float = 0.0
 
     @classmethod
-    def rest(cls, model: ReducedModel, bank: JointBank, t: float = 0.0) -> "NewmarkState":
-        """Structure at rest, joints virgin."""
+    def rest(cls, model: ReducedModel, bank: JointLaw, t: float = 0.0) -> "NewmarkState":
+        """Structure at rest, joints virgin (``anchor``: the law's initial state)."""
         r = model.n_reduced
         return cls(t=t, q=np.zeros(r), v=np.zeros(r), a=np.zeros(r),
-                   anchor=bank.initial_anchor(), g=np.zeros(bank.n_joints), e=0.0)
+                   anchor=bank.initial_state(), g=np.zeros(bank.n_joints), e=0.0)
 
     @classmethod
     def periodic(cls, model: ReducedModel, bank: JointBank, harmonics, q_harmonics,
@@ -124,8 +126,9 @@ class NewmarkState:
         return cls(t=0.0, q=q, v=v, a=np.linalg.solve(model.M, f), anchor=anchor, g=g, e=1.0)
 
     def copy(self) -> "NewmarkState":
+        anchor = self.anchor.copy() if hasattr(self.anchor, "copy") else self.anchor
         return NewmarkState(self.t, self.q.copy(), self.v.copy(), self.a.copy(),
-                            self.anchor.copy(), self.g.copy(), self.e)
+                            anchor, self.g.copy(), self.e)
 
 
 @dataclass
@@ -157,8 +160,9 @@ class EnergyBalance:
 class NewmarkRun:
     """Result of :func:`integrate`: times ``t`` (n_steps+1,), reduced displacements
     ``q`` and velocities ``v`` (n_steps+1, r), slips (n_steps+1, n_joints), the final
-    state, the energy balance (None if not asked for) and the total number of Newton
-    iterations."""
+    state, the energy balance (None if not asked for, or for a joint law other than a
+    Jenkins bank: only the bank states its stored energy and friction work) and the
+    total number of Newton iterations."""
 
     t: np.ndarray
     q: np.ndarray
@@ -185,12 +189,15 @@ class NewmarkIntegrator:
     Parameters
     ----------
     model : ReducedModel
-    bank : JointBank
-        Joint banks; ``bank.K_T`` must equal ``model.K_T``.
+    bank : joints.law.JointLaw
+        The joints; ``bank.K_T`` must equal ``model.K_T``. A Jenkins bank
+        (:class:`joints.bank.JointBank`) runs the compiled step loop; any other law the
+        plain Python loop over its ``step`` (300-600x slower per step for one joint,
+        ``benchmarks/bench_joint_laws.py``; ``compiled`` is then ignored).
     settings : NewmarkSettings
     """
 
-    def __init__(self, model: ReducedModel, bank: JointBank, settings: NewmarkSettings):
+    def __init__(self, model: ReducedModel, bank: JointLaw, settings: NewmarkSettings):
         K_T_bank = bank.K_T
         if K_T_bank.shape != model.K_T.shape or np.any(
                 np.abs(K_T_bank - model.K_T) > 1e-9 * np.abs(model.K_T) + 1e-300):
@@ -213,9 +220,11 @@ class NewmarkIntegrator:
         self._BT, self._YT, self._Zc = c(self.B.T), c(Y.T), c(self.Z)
         self._G = c(G, dtype=float)
         self._K_T = c(model.K_T, dtype=float)
-        self._k, self._phi = c(bank.stiffness), c(bank.slip_limit)
-        self._fric = c(bank.friction_force)
-        self.slip_scale = float(np.min(bank.slip_limit)) * 1e-3
+        self.is_bank = isinstance(bank, JointBank)
+        if self.is_bank:
+            self._k, self._phi = c(bank.stiffness), c(bank.slip_limit)
+            self._fric = c(bank.friction_force)
+        self.slip_scale = float(np.min(bank.slip_scale)) * 1e-3
         self.bdt2, self.ga_dt = be * dt * dt, ga * dt
         self._reference_ops = None
 
@@ -249,9 +258,10 @@ class NewmarkIntegrator:
         G, K_T = model.G, model.K_T
         r = model.n_reduced
         sl = self.Sinv @ load
+        energy = energy and self.is_bank
         if energy:
             kin0, strain0, stored0 = _energies(model, bank, st.q, st.v, st.anchor)
-        if compiled and not record_force:
+        if compiled and not record_force and self.is_bank:
             x0 = np.concatenate([st.q, st.v, st.a])
             c = np.ascontiguousarray
             qh, vh, sh, x, g_end, anchor, dissip, iters, status = march(
@@ -267,9 +277,9 @@ class NewmarkIntegrator:
             P, Vp, GP, GB = self._reference_operators()
             qh, vh, sh, fh, x, g_end, anchor, dissip, iters = reference_loop(
                 st, e, self.B, sl, GP, GB, G @ sl, P, Vp, self.Y, self.Z, self.cz,
-                self.bdt2, al, self.ga_dt, G, K_T, bank.stiffness, bank.slip_limit,
-                settings.tol, settings.max_iter, self.slip_scale, record_force,
-                bank.friction_force)
+                self.bdt2, al, self.ga_dt, G, K_T, bank.step, settings.tol,
+                settings.max_iter, self.slip_scale, record_force,
+                bank.dissipated if self.is_bank else None)
         q1, v1 = x[:r], x[r:2 * r]
         balance = None
         if energy:   # vectorized over the history (matrix products, O(n r^2))
@@ -303,8 +313,9 @@ def integrate(model: ReducedModel, bank: JointBank, load, excitation, settings: 
     Parameters
     ----------
     model : ReducedModel
-    bank : JointBank
-        Joint banks; ``bank.K_T`` must equal ``model.K_T``.
+    bank : joints.law.JointLaw
+        The joints (a :class:`joints.bank.JointBank`, or any law: then the plain step
+        loop, :class:`NewmarkIntegrator`); ``bank.K_T`` must equal ``model.K_T``.
     load : ndarray, shape (r,)
         Reduced load pattern ``Phi^T f`` (N).
     excitation : ndarray, shape (n_steps + 1,)

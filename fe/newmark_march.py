@@ -15,16 +15,18 @@ import numpy as np
 from numba import njit
 
 from joints import kernel
-from joints.jenkins import jenkins_update
 from joints.kernel_reference import KERNEL_STAMP
 
 __all__ = ["march", "reference_loop"]
 
 
 def reference_loop(st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, G, K_T,
-                   k_sl, phi_sl, tol, max_iter, slip_scale, record_force, fric):
-    """Python step loop over :func:`joints.jenkins.jenkins_update` (reference; the
-    arguments are :meth:`fe.newmark.NewmarkIntegrator.run`'s operators)."""
+                   step, tol, max_iter, slip_scale, record_force, dissipated=None):
+    """Python step loop over a joint law's ``step(slip, state) -> (F, dF/ds, state)``
+    (:mod:`joints.law`; for a Jenkins bank :func:`joints.jenkins.jenkins_update`: the
+    reference of :func:`march`). The other arguments are
+    :meth:`fe.newmark.NewmarkIntegrator.run`'s operators; ``dissipated(old, new)`` the
+    friction work of a committed step (J), or None (then 0 is summed)."""
     n_steps = e.size - 1
     r = sl.size
     nj = K_T.size
@@ -51,7 +53,7 @@ def reference_loop(st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, 
             s_lin = s_lin + al * bdt2 * (Z @ g0)
         s = s_lin - cz * (Z @ g0)             # start from the last joint force
         for _ in range(max_iter):
-            F, kt, anc = jenkins_update(s, anchor, k_sl, phi_sl)
+            F, kt, anc = step(s, anchor)
             g = F - K_T * s
             h = s - s_lin + cz * (Z @ g)
             iters += 1
@@ -61,7 +63,8 @@ def reference_loop(st, e, B, sl, GP, GB, Gsl, P, Vp, Y, Z, cz, bdt2, al, ga_dt, 
             s = s - np.linalg.solve(J, h)
         else:
             raise RuntimeError(f"Newton did not converge at step {k} (|h| = {np.abs(h).max():.3e})")
-        dissip += float(np.sum(fric * np.abs(anc - anchor)))
+        if dissipated is not None:
+            dissip += dissipated(anchor, anc)
         anchor = anc
         a1 = a_lin - (1.0 + al) * (Y @ g)
         q1 = P @ x + bdt2 * a1

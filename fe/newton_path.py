@@ -9,7 +9,12 @@ accepted once ``phi(y + lam d) <= (1 - 2 c lam) phi(y)``, halving ``lam`` from 1
 from the solution (deep macro-slip started from the stuck-joint guess) the full step
 overshoots by orders of magnitude; the line search keeps every iterate at a lower
 residual. Near the solution the full step is always accepted, so the iterates (and the
-converged numbers) are those of the undamped method.
+converged numbers) are those of the undamped method; once the residual is at round-off
+(below ``ROUNDOFF`` of ``max |y|``) the decrease test means nothing and the full step is
+taken too. Every solver of a steady state uses this one Newton (harmonic balance,
+:mod:`fe.hb_exact`, :mod:`fe.epmc`, :mod:`runs.response_control`); the batched
+first-harmonic balance of many levels (:mod:`fe.hb_resonance`) applies the same rule
+level by level.
 
 :func:`follow` carries a converged solution along a scalar parameter ``p`` (frequency
 between two lines, or a load factor) with a secant predictor, halving the step when a
@@ -31,6 +36,9 @@ __all__ = ["SteadyStateError", "damped_newton", "follow", "natural_continuation"
 ARMIJO = 1e-4
 #: Smallest line-search factor tried before the step is declared stalled.
 MIN_DAMPING = 2.0 ** -12
+#: Residual (relative to ``max |y|``) below which the sufficient-decrease test is
+#: round-off and the full Newton step is taken (as the undamped method does).
+ROUNDOFF = 64 * np.finfo(float).eps
 #: Halvings of the frequency step between two lines before a line is given up.
 FREQUENCY_HALVINGS = 8
 
@@ -55,7 +63,8 @@ class SteadyStateError(RuntimeError):
 
 
 def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
-                  scale: float):
+                  scale: float, relative_update: Callable | None = None,
+                  admissible: Callable | None = None):
     """Newton's method with an Armijo line search on ``|r|^2/2`` (module docstring).
 
     Parameters
@@ -69,6 +78,13 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
         Newton iterations (each one Jacobian factorization).
     scale : float
         Magnitude of ``y`` (> 0) below which ``max |y|`` is not used to normalize.
+    relative_update : callable, optional
+        ``relative_update(y_new, d) -> float``, the size of the full step ``d`` that
+        lands at ``y_new`` compared with ``tol`` (default ``max |d| / max(max |y_new|,
+        1e-12 scale)``), for unknowns of mixed units.
+    admissible : callable, optional
+        ``admissible(y) -> bool``: trial points outside the domain (e.g. a frequency
+        <= 0) are treated as a failed decrease and the step is halved.
 
     Returns
     -------
@@ -91,17 +107,26 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
             d = np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
             raise SteadyStateError("", f"singular Jacobian after {it - 1} iterations") from None
-        upd = float(np.abs(d).max() / max(np.abs(y + d).max(), floor))
+        upd = (float(np.abs(d).max() / max(np.abs(y + d).max(), floor))
+               if relative_update is None else float(relative_update(y + d, d)))
+        if not np.isfinite(upd):
+            raise SteadyStateError("", f"non-finite Newton step after {it - 1} iterations")
         if upd < tol:
             return y + d, it, upd, n_eval
         lam = 1.0
+        roundoff = 0.5 * (ROUNDOFF * max(np.abs(y).max(), floor)) ** 2
         while True:
             yt = y + lam * d
-            rt, Jt = evaluate(yt)
-            n_eval += 1
-            phit = 0.5 * float(rt @ rt)
+            if admissible is None or admissible(yt):
+                rt, Jt = evaluate(yt)
+                n_eval += 1
+                phit = 0.5 * float(rt @ rt)
+            else:
+                phit = np.inf
             if phit <= (1.0 - 2.0 * ARMIJO * lam) * phi:
                 break
+            if lam == 1.0 and np.isfinite(phit) and phi <= roundoff:
+                break       # residual at round-off: no decrease to test, full step
             lam *= 0.5
             if lam < MIN_DAMPING:
                 raise SteadyStateError(
@@ -198,21 +223,31 @@ def natural_continuation(solve, omegas, progress) -> list:
     return sols
 
 
+def _tag(solution, how: str):
+    """Record a fallback on a solution that has a ``fallback`` field (not silent)."""
+    if hasattr(solution, "fallback"):
+        solution.fallback = "; ".join(x for x in (how, solution.fallback) if x)
+    return solution
+
+
 def _recover(solve, w, hist, exc):
     """A line whose secant prediction failed: the previous solution as the guess, then
     the frequency step from the previous line halved until the corrector converges
     (:func:`fe.newton_path.follow`), then a fresh start from the stuck-joint solution
-    (``solve(w, None)``: the jump of a stepped-sine test when the branch ends)."""
+    (``solve(w, None)``: the jump of a stepped-sine test when the branch ends). The
+    route taken is recorded in the solution's ``fallback``."""
+    first = getattr(exc, "reason", str(exc))
     try:
-        return solve(w, hist[-1][1].slip)
+        return _tag(solve(w, hist[-1][1].slip), f"previous line as the guess ({first})")
     except RuntimeError:
         pass
     try:
-        return follow(solve, hist, w, _secant, max_halvings=FREQUENCY_HALVINGS)[0]
+        return _tag(follow(solve, hist, w, _secant, max_halvings=FREQUENCY_HALVINGS)[0],
+                    f"frequency step from the previous line halved ({first})")
     except RuntimeError:
         pass
     try:
-        return solve(w, None)
+        return _tag(solve(w, None), f"fresh start from the stuck-joint solution ({first})")
     except RuntimeError as fresh:
         reason = getattr(exc, "reason", str(exc))
         df = abs(w - hist[-1][0]) / (2 * np.pi) * 2.0 ** -FREQUENCY_HALVINGS

@@ -39,6 +39,8 @@ __all__ = [
     "backbone",
     "masing_branch",
     "force_history",
+    "masing_step",
+    "IWAN_VIRGIN",
     "steady_loop",
     "dissipation_per_cycle",
 ]
@@ -296,6 +298,30 @@ def force_history(p: IwanParameters, u):
             stack_u.append(float(u[e - 1]))
             stack_F.append(float(F[e - 1]))
     return F
+
+
+#: State of a virgin joint for :func:`masing_step`: (slip, force, direction, reversal
+#: slips, reversal forces).
+IWAN_VIRGIN = (0.0, 0.0, 0.0, (), ())
+
+
+def masing_step(p: IwanParameters, u: float, state=IWAN_VIRGIN):
+    """One step of :func:`force_history` (same rules) from a committed ``state`` to the
+    slip ``u`` (m): ``(force (N), tangent dF/du (N/m), new_state)``. The tangent is the
+    slope of the branch at ``u``, ``backbone'((u - u_r)/2)`` (``K_T`` at a reversal).
+    """
+    u0, F, d0, su, sF = state
+    d = float(np.sign(u - u0)) or d0
+    if d0 and d != d0:                               # reversal at the committed point
+        su, sF = su + (u0,), sF + (F,)
+    while su and (len(su) == 1 and d * (u + su[-1]) > 0.0
+                  or len(su) >= 2 and d * (u - su[-2]) > 0.0):
+        su, sF = su[:-2], sF[:-2]                    # loop closed: forget two (or one)
+    x = 0.5 * (u - su[-1]) if su else u
+    F = float(masing_branch(p, u, su[-1], sF[-1]) if su else backbone(p, u))
+    a = abs(x)
+    tangent = p.K_T - p.R * a ** (p.chi + 1.0) / (p.chi + 1.0) if a < p.phi_max else 0.0
+    return F, tangent, (float(u), F, d, su, sF)
 
 
 def steady_loop(p: IwanParameters, amplitude: float, n_points: int = 401):

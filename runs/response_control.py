@@ -13,13 +13,14 @@ load pattern) gets one more unknown, ``F``, and one more equation,
 
     |X_d|^2 = A^2,   X_d = F x_d^lin - (D_1^{-1} G^T)_d G_1(S),
 
-solved together by Newton's method with the exact Jacobian (the joints through either
-path of :mod:`fe.joint_harmonics`). Lines are followed by the secant continuation of
-:func:`fe.harmonic_balance.natural_continuation`. :class:`ResponseControlProtocol` plugs
-this into :func:`runs.stepped_sine.run_campaign` (store, resume, executors): the
-campaign's ``force`` column holds the held amplitudes (m), the level's receptance is
-``X / F`` per line, and the force of each line is ``A / |receptance at d|``
-(:func:`line_forces`).
+solved together by the globalized Newton of :func:`fe.newton_path.damped_newton` with
+the exact Jacobian (the joints through either path of :mod:`fe.joint_harmonics`: any
+joint law by its describing function, or Jenkins banks by AFT). Lines are followed by
+the secant continuation of :func:`fe.harmonic_balance.natural_continuation`.
+:class:`ResponseControlProtocol` plugs this into :func:`runs.stepped_sine.run_campaign`
+(store, resume, executors): the campaign's ``force`` column holds the held amplitudes
+(m), the level's receptance is ``X / F`` per line, and the force of each line is
+``A / |receptance at d|`` (:func:`line_forces`).
 
 SI units: rad/s, m, N.
 """
@@ -31,6 +32,7 @@ import numpy as np
 
 from fe.harmonic_balance import HBOperator, HBSettings, HBSolution, natural_continuation
 from fe.joint_harmonics import joint_path
+from fe.newton_path import SteadyStateError, damped_newton
 from fe.reduction import ReducedModel
 from joints.iwan import IwanParameters
 
@@ -90,29 +92,36 @@ def solve_response_controlled(model: ReducedModel, joints, load, omega: float, c
         Gh = evaluate(y)[0]
         F = float(op.y_lin @ (y + op.Rr @ Gh.reshape(-1)) / (op.y_lin @ op.y_lin))
     scale = max(np.abs(op.y_lin).max() * A / abs(x_lin), 1e-300)
-    upd = np.inf
-    for it in range(1, max_iter + 1):
+    n = nc * nj
+
+    def balance(z):
+        """Residual and exact Jacobian in ``z = [y, F]`` (module docstring)."""
+        y, F = z[:-1], z[-1]
         Gh, Jg, amp, N1 = evaluate(y)
         X = F * x_lin - x_g @ N1
-        res = np.empty(nc * nj + 1)
+        res = np.empty(n + 1)
         res[:-1] = y - F * op.y_lin + op.Rr @ Gh.reshape(-1)
         res[-1] = 0.5 * (abs(X) ** 2 / A ** 2 - 1.0)
-        Jac = np.empty((nc * nj + 1, nc * nj + 1))
-        Jac[:-1, :-1] = eye + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(nc * nj, nc * nj)
+        Jac = np.empty((n + 1, n + 1))
+        Jac[:-1, :-1] = eye + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(n, n)
         Jac[:-1, -1] = -op.y_lin
         dN1 = Jg[:, 2 * i1, :] + 1j * Jg[:, 2 * i1 + 1, :]           # (nj, nc): dN1_l/dY[d, l]
         dX = -(x_g[:, None] * dN1).T                                   # (nc, nj)
         Jac[-1, :-1] = (np.conj(X) * dX).real.reshape(-1) / A ** 2
         Jac[-1, -1] = (np.conj(X) * x_lin).real / A ** 2
-        d = np.linalg.solve(Jac, -res)
-        y, F = y + d[:-1], F + d[-1]
-        upd = max(np.abs(d[:-1]).max() / max(np.abs(y).max(), scale * 1e-12),
-                  abs(d[-1]) / max(abs(F), 1e-300))
-        if upd < tol:
-            break
-    else:
-        raise RuntimeError(f"response-controlled balance did not converge at "
-                           f"{omega / (2 * np.pi):.4g} Hz (relative update {upd:.2e})")
+        return res, Jac
+
+    def relative_update(z, d):
+        return max(np.abs(d[:-1]).max() / max(np.abs(z[:-1]).max(), scale * 1e-12),
+                   abs(d[-1]) / max(abs(z[-1]), 1e-300))
+
+    try:
+        z, it, upd, _ = damped_newton(balance, np.append(y, F), tol, max_iter, scale,
+                                      relative_update=relative_update)
+    except SteadyStateError as exc:
+        raise SteadyStateError(f"{omega / (2 * np.pi):.6g} Hz", exc.reason,
+                               solver="response-controlled balance") from None
+    y, F = z[:-1], float(z[-1])
     if F < 0:              # the mirror solution (odd joints): same receptance, F > 0
         y, F = -y, -F
     Gh, _, amp, _ = evaluate(y)

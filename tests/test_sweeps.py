@@ -152,8 +152,10 @@ def test_full_model_equals_all_modes_basis(lumped):
 
 
 def test_describing_function_derivatives():
-    """iwan_describing equals joints.describing.describing_function (micro and macro-slip, beta > 0
-    and = 0) and its A-derivatives equal central differences."""
+    """The law of two joints (iwan_describing) equals the one-joint call
+    joints.describing.describing_function (micro and macro-slip, beta > 0 and = 0; one
+    implementation, its closed form checked against quadrature of the Masing loop in
+    tests/test_iwan.py) and its A-derivatives equal central differences."""
     for p in (SDOF_JOINT, IwanParameters(chi=-0.3, K_T=2e7, F_S=90.0, beta=0.0)):
         J = ExactIwanJoints([p, p], 2)
         for x in (0.01, 0.3, 0.97, 1.05, 2.4, 7.0):   # A/2 never at phi_max (kink)
