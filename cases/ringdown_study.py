@@ -61,11 +61,12 @@ class RingdownSettings:
 
 
 def ringdown_case(name: str, mode: int):
-    """The jointed model of case ``name`` studying ``mode``: the one place this command
-    gets a case (:func:`cases.registry.nonlinear_case`)."""
-    from cases.registry import nonlinear_case
+    """The jointed model of case ``name`` (a shipped name or a case file) studying
+    ``mode``: the one place this command gets a case (its ``nonlinear_model``
+    capability, :mod:`cases.case`)."""
+    from cases.registry import resolve_case
 
-    return nonlinear_case(name, mode=mode)
+    return resolve_case(name).nonlinear_model(mode=mode)
 
 
 def settings_hash(case, settings: RingdownSettings) -> str:

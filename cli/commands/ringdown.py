@@ -14,9 +14,9 @@ the same inputs reuses the complete record and the stored virtual test.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 import math
 
-from cases.registry import NONLINEAR_CASES
 from cli import validate
 from runs.jsonio import print_json
 
@@ -36,7 +36,9 @@ def register(subparsers) -> None:
             "frequency and damping against the drive-point amplitude compared with the "
             "EPMC backbone and a response-controlled virtual test at the same amplitudes."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--case", choices=NONLINEAR_CASES, required=True)
+    parser.add_argument("--case", required=True, metavar="NAME|FILE",
+                        help="a shipped case or a case file (.toml) with every joint "
+                             "parameter given")
     parser.add_argument("--mode", type=int, required=True, help="1-based stuck-joint mode")
     parser.add_argument("--amplitude", type=float, default=0.5,
                         help="start: largest joint slip / its phi_max (the joint that "
@@ -69,7 +71,8 @@ def run(args) -> int:
         raise ValueError(f"--response-levels must be in 0..50, got {args.response_levels}")
     settings = RingdownSettings(mode=args.mode, amplitude=args.amplitude, cycles=args.cycles,
                                 steps_per_period=args.steps_per_period, start=args.start)
-    out = validate.output_dir(args.out or f"results/ringdown-{args.case}-mode{args.mode}",
+    label = Path(args.case).stem if args.case.endswith(".toml") else args.case
+    out = validate.output_dir(args.out or f"results/ringdown-{label}-mode{args.mode}",
                               "--out")
     out.mkdir(parents=True, exist_ok=True)
     report = ringdown_report(args.case, settings, out, (lo, hi), args.response_levels,
