@@ -58,7 +58,7 @@ T_CAUSE = 6.0
 #: Weight ratio to the named explanation from which another one makes it ambiguous.
 W_AMBIGUOUS = 1.0 / 3.0
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
-MIN_REPEAT_DOF = 3
+MIN_REPEAT_DOF = 6
 #: Noise floors: relative for omega2 and zeta, absolute for other channels.
 FLOORS = {"omega2": 1e-9, "zeta": 1e-7}
 _DEFAULT_FLOOR = 1e-2
