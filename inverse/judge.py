@@ -16,7 +16,9 @@ e.g. the log response amplitude, the same way on an absolute scale):
   ``c`` orthogonal to ``1, x, x^2`` (``x`` the log abscissa) gives ``d = c . ln y``,
   ``E d^2 = sigma_rel^2`` for any locally quadratic trend, so
   ``sigma_rel^2 = mean(d^2)`` with one degree of freedom per window (three levels:
-  linear contrasts). The curve is not the model being judged: a misfit of that model
+  linear contrasts). When the run order is not monotone in amplitude, the contrasts
+  are projected to those also blind to a quadratic trend in run order (two degrees of
+  freedom fewer): a drift with time is not repeatability. The curve is not the model being judged: a misfit of that model
   cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
   is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.
 * **total** ``= sqrt(identification^2 + repeatability^2)``, floored at
@@ -122,17 +124,34 @@ def _contrast(x):
     return q[:, -1]
 
 
-def smooth_scatter(x, y):
+def smooth_scatter(x, y, t=None):
     """Scatter of ``y`` (n,) about a model-free smooth curve over ``x`` (n,), distinct
     ``x`` (module doc): (sd, degrees of freedom). Local quadratic contrasts over windows
-    of four points (linear over three when n = 3); (0, 0) for n < 3."""
+    of four points (linear over three when n = 3); (0, 0) for n < 3. With ``t`` (n,)
+    (the run order, not monotone in ``x``) the contrasts are also made blind to a
+    quadratic trend in ``t`` (a drift with time is not counted as scatter), at the cost
+    of two degrees of freedom."""
     order = np.argsort(x, kind="stable")
     x, y = np.asarray(x, float)[order], np.asarray(y, float)[order]
     n = x.size
     if n < 3:
         return 0.0, 0
     w = 4 if n >= 4 else 3
-    d = np.array([_contrast(x[i:i + w]) @ y[i:i + w] for i in range(n - w + 1)])
+    C = np.zeros((n - w + 1, n))
+    for i in range(n - w + 1):
+        C[i, i:i + w] = _contrast(x[i:i + w])
+    if t is None or C.shape[0] <= 3:
+        d = C @ y
+        return float(np.sqrt(np.mean(d**2))), int(d.size)
+    tt = np.asarray(t, float)[order]
+    tt = (tt - tt.mean()) / (np.ptp(tt) or 1.0)
+    T = C @ np.column_stack([tt, tt**2])                   # (W, 2): trend seen by C
+    _, sv, vt = np.linalg.svd(T.T)
+    rank_t = int(np.sum(sv > 1e-9 * max(sv.max(), 1e-300)))
+    A = vt[rank_t:].T                                      # combinations blind to it
+    Q, sv2, _ = np.linalg.svd(C.T @ A, full_matrices=False)
+    Q = Q[:, sv2 > 1e-9 * sv2.max()]
+    d = Q.T @ y
     return float(np.sqrt(np.mean(d**2))), int(d.size)
 
 
@@ -166,17 +185,23 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         (absolute, e.g. a log response amplitude)
     stds : {channel: (n,) or None} the identification's standard uncertainties
     level_ids : (n,) level label of each row (rows sharing it are repeats)
-    run_order : (n,) chronological order (kept for the report; not used in the estimate)
+    run_order : (n,) chronological order; when it is not monotone in amplitude the
+        smooth-curve scatter is made blind to a quadratic drift with time
     floors : overrides of :data:`FLOORS`; model_error : {channel: (n,)} added in
         quadrature to an estimated (not identification) part.
     """
-    del run_order
     floors = {**FLOORS, **(floors or {})}
     model_error = model_error or {}
     level_ids = np.asarray(level_ids)
     x = np.log(np.asarray(abscissa, float))
     ident, rep, total, source, dof, kind, floor = {}, {}, {}, {}, {}, {}, {}
     labels = np.unique(level_ids)
+    tm = None
+    if run_order is not None:
+        tm = np.array([np.mean(np.asarray(run_order, float)[level_ids == g])
+                       for g in labels])
+        dt = np.diff(tm[np.argsort([np.mean(x[level_ids == g]) for g in labels])])
+        tm = None if np.all(dt > 0) or np.all(dt < 0) else tm
     for c, y in values.items():
         y = np.asarray(y, float)
         rel = c in _RELATIVE
@@ -186,7 +211,7 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
         means = np.array([np.mean(y[level_ids == g]) for g in labels])
         xm = np.array([np.mean(x[level_ids == g]) for g in labels])
-        s_s, nu_s = smooth_scatter(xm, np.log(means) if rel else means)
+        s_s, nu_s = smooth_scatter(xm, np.log(means) if rel else means, tm)
         if nu_r >= MIN_REPEAT_DOF:
             s2, nu = s_r**2, nu_r
             words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof)", "repeats"

@@ -221,13 +221,16 @@ def test_choice_does_not_depend_on_row_order():
     s = np.geomspace(0.02, 1.0, 8)
     om2, ze = _iwan(-0.6, s)
     run = np.array([5, 1, 7, 3, 8, 2, 6, 4])
-    data = _table(om2 + 40.0 * (run - 1), ze, control="response", response=s,
-                  excitation=np.ones(8), run=run)                       # a drift
+    # a drift of 0.06 % of omega2 per run: above the repeatability the smooth-curve
+    # scatter reads off this strongly curved (3 % drop) series (issue 19: the noise is
+    # no longer the residual scatter of the best candidate)
+    data = _table(om2 + 150.0 * (run - 1), ze, control="response", response=s,
+                  excitation=np.ones(8), run=run)
     r1 = diagnose(data)
     perm = np.random.default_rng(3).permutation(8)
     r2 = diagnose(data.take(perm))
     assert r1["cause"] == "thermal-drift"
-    assert r1["parameters"]["d"] == pytest.approx(40.0, rel=0.1)
+    assert r1["parameters"]["d"] == pytest.approx(150.0, rel=0.1)
     assert r1["cause"] == r2["cause"] and r1["parameters"]["model"] == r2["parameters"]["model"]
     num = {k: v for k, v in r1["parameters"].items() if k != "model"}
     assert {k: r2["parameters"][k] for k in num} == pytest.approx(num, rel=1e-6)
