@@ -301,6 +301,30 @@ def test_cli_text_output_on_shipped_paper_data(capsys):
     text = capsys.readouterr().out
     assert text.startswith("double-beam: mode 2 (force control, 10 levels)")
     assert "cause:" in text and "gain" in text and "contradictions" in text
+    # issue 19: the noise is named, and the tie contradiction still stated with numbers
+    assert "noise (identification + repeatability): omega2" in text
+    assert "scatter about a smooth curve" in text
+    assert "3 pi/4 x that" in text and "3.46x less" in text
+
+
+def test_shipped_paper_data_json_names_noise_bounds_and_failures():
+    from cases.registry import MEASURED_DATA
+    from ident.measured import read_measured
+
+    r = diagnose(read_measured(MEASURED_DATA["double-beam"]))
+    tie = [c for c in r["contradiction_details"] if c["kind"] == "tie-violated"]
+    assert len(tie) == 1 and tie[0]["levels"] == [1, 10]
+    assert r["noise"]["omega2"]["dof"] == 7 and r["noise"]["zeta"]["identification_rel"] == 0
+    assert r["verdict_identification_only"] is None      # the table has no std columns
+    assert r["failures"]["total"] == 0
+    bounds = r["parameter_bounds"]
+    assert "chi" in bounds and all("at_bound" in b for b in bounds.values())
+    for name in r["at_bound"]:
+        assert name in r["summary"]
+        if bounds[name]["interval"] is not None:
+            assert bounds[name]["interval_kind"].startswith("profile")
+    top = [p["level"] for p in r["held_out_predictions"]["levels"]]
+    assert top == [8, 9, 10]
 
 
 @pytest.mark.parametrize("content, needle", [
