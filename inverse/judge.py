@@ -10,15 +10,12 @@ e.g. the log response amplitude, the same way on an absolute scale):
   repeats (rows sharing a level), the pooled within-level variance of the relative
   values ``y / mean_level(y) - 1`` (``nu = sum_g (n_g - 1)`` degrees of freedom).
   Otherwise, and added to repeats of fewer than :data:`MIN_REPEAT_DOF` degrees of
-  freedom, the scatter of the level means about a *model-free* smooth curve: the
-  difference-based estimator of Gasser, Sroka & Jennen-Steinmetz (1986) with local
-  quadratic contrasts. For every window of four successive levels the unit contrast
-  ``c`` orthogonal to ``1, x, x^2`` (``x`` the log abscissa) gives ``d = c . ln y``,
-  ``E d^2 = sigma_rel^2`` for any locally quadratic trend, so
-  ``sigma_rel^2 = mean(d^2)`` with one degree of freedom per window (three levels:
-  linear contrasts). When the run order is not monotone in amplitude, the contrasts
-  are projected to those also blind to a quadratic trend in run order (two degrees of
-  freedom fewer): a drift with time is not repeatability. The curve is not the model being judged: a misfit of that model
+  freedom, the scatter of the level means (``ln y``) about a *model-free* smooth curve
+  of the amplitude (:func:`smooth_scatter`): a Muntz polynomial in the relative
+  amplitude, plus a quadratic trend in run order when the run order is not monotone in
+  amplitude (a drift with time is not repeatability), ``sigma^2 = RSS / (n - rank)``;
+  with too few levels for that, the difference-based estimator of Gasser, Sroka &
+  Jennen-Steinmetz (1986) with local quadratic contrasts. The curve is not the model being judged: a misfit of that model
   cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
   is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.
 * **total** ``= sqrt(identification^2 + repeatability^2)``, floored at
@@ -124,18 +121,38 @@ def _contrast(x):
     return q[:, -1]
 
 
+def _residual_scatter(B, y):
+    """(sd, dof) of ``y`` about its least-squares projection on the columns of ``B``."""
+    coef, _, rank, _ = np.linalg.lstsq(B, y, rcond=1e-10)
+    dof = B.shape[0] - int(rank)
+    return float(np.sqrt(np.sum((y - B @ coef) ** 2) / dof)), dof
+
+
 def smooth_scatter(x, y, t=None):
-    """Scatter of ``y`` (n,) about a model-free smooth curve over ``x`` (n,), distinct
-    ``x`` (module doc): (sd, degrees of freedom). Local quadratic contrasts over windows
-    of four points (linear over three when n = 3); (0, 0) for n < 3. With ``t`` (n,)
-    (the run order, not monotone in ``x``) the contrasts are also made blind to a
-    quadratic trend in ``t`` (a drift with time is not counted as scatter), at the cost
-    of two degrees of freedom."""
+    """Scatter of ``y`` (n,) about a model-free smooth curve over ``x`` (n,), the log
+    amplitude, distinct ``x`` (module doc): (sd, degrees of freedom).
+
+    The curve: a Muntz polynomial in the relative amplitude ``s = exp(x - max x)``,
+    ``1, ln s, s^(1/3), s^(2/3), s`` (any power law of amplitude to a few 1e-4 of its
+    range: the local-polynomial alternative leaves 1e-2 at level ratios of 2.5), plus
+    ``t, t^2`` of the run order ``t`` (when given: a drift with time is not scatter),
+    when that leaves at least 3 degrees of freedom. Otherwise local quadratic contrasts
+    over windows of four points (linear over three when n = 3), one degree of freedom
+    each, projected on those blind to the trend in ``t`` when given (two fewer);
+    (0, 0) for n < 3."""
     order = np.argsort(x, kind="stable")
     x, y = np.asarray(x, float)[order], np.asarray(y, float)[order]
     n = x.size
     if n < 3:
         return 0.0, 0
+    sr = np.exp(x - x.max())
+    cols = [np.ones(n), x - x.mean(), sr ** (1 / 3), sr ** (2 / 3), sr]
+    if t is not None:
+        tt = np.asarray(t, float)[order]
+        tt = (tt - tt.mean()) / (np.ptp(tt) or 1.0)
+        cols += [tt, tt**2]
+    if n - len(cols) >= 3:
+        return _residual_scatter(np.column_stack(cols), y)
     w = 4 if n >= 4 else 3
     C = np.zeros((n - w + 1, n))
     for i in range(n - w + 1):
@@ -143,15 +160,11 @@ def smooth_scatter(x, y, t=None):
     if t is None or C.shape[0] <= 3:
         d = C @ y
         return float(np.sqrt(np.mean(d**2))), int(d.size)
-    tt = np.asarray(t, float)[order]
-    tt = (tt - tt.mean()) / (np.ptp(tt) or 1.0)
-    T = C @ np.column_stack([tt, tt**2])                   # (W, 2): trend seen by C
+    T = C @ np.column_stack(cols[-2:])                     # the trend in t seen by C
     _, sv, vt = np.linalg.svd(T.T)
-    rank_t = int(np.sum(sv > 1e-9 * max(sv.max(), 1e-300)))
-    A = vt[rank_t:].T                                      # combinations blind to it
+    A = vt[int(np.sum(sv > 1e-9 * max(sv.max(), 1e-300))):].T   # combinations blind to it
     Q, sv2, _ = np.linalg.svd(C.T @ A, full_matrices=False)
-    Q = Q[:, sv2 > 1e-9 * sv2.max()]
-    d = Q.T @ y
+    d = Q[:, sv2 > 1e-9 * sv2.max()].T @ y
     return float(np.sqrt(np.mean(d**2))), int(d.size)
 
 
