@@ -25,8 +25,8 @@ e.g. the log response amplitude, the same way on an absolute scale):
 Fit test (:func:`fit_test`): with known noise ``chi2 ~ chi-square(N - k)``; with an
 estimated repeatability ``(chi2 / (N - k)) ~ F(N - k, nu)``, ``nu`` the channels' degrees
 of freedom combined by moment matching (Satterthwaite 1946):
-``nu = N_est^2 / sum_c (n_c^2 / nu_c)`` over the ``n_c`` rows of each estimated channel,
-``N_est = sum_c n_c``.
+``nu = N^2 / sum_c (n_c^2 / nu_c)`` over the ``n_c`` rows of each estimated channel,
+``N`` the rows of every channel (a known channel adds no variance to the estimate).
 
 Selection (:func:`select`): the IC of a candidate is ``chi2 + 2k + T n_causes``
 (``T`` = :data:`T_CAUSE`, prior odds ``e^-3`` per cause, :mod:`inverse.diagnose`);

@@ -89,8 +89,9 @@ def smooth_scatter(x, y, t=None):
     The curve: a Muntz polynomial in the relative amplitude ``s = exp(x - max x)``,
     ``1, ln s, s^(1/3), s^(2/3), s`` (any power law of amplitude to a few 1e-4 of its
     range: the local-polynomial alternative leaves 1e-2 at level ratios of 2.5), plus
-    ``t, t^2`` of the run order ``t`` (when given: a drift with time is not scatter),
-    when that leaves at least 3 degrees of freedom. Otherwise local quadratic contrasts
+    ``t, t^2`` of the run order ``t`` (when given: a drift with time is not scatter;
+    ``t`` alone, then neither, when the levels are too few), when that leaves at least 3
+    degrees of freedom. Otherwise local quadratic contrasts
     over windows of four points (linear over three when n = 3), one degree of freedom
     each, projected on those blind to the trend in ``t`` when given (two fewer);
     (0, 0) for n < 3."""
@@ -101,12 +102,15 @@ def smooth_scatter(x, y, t=None):
         return 0.0, 0
     sr = np.exp(x - x.max())
     cols = [np.ones(n), x - x.mean(), sr ** (1 / 3), sr ** (2 / 3), sr]
+    trend = []
     if t is not None:
         tt = np.asarray(t, float)[order]
         tt = (tt - tt.mean()) / (np.ptp(tt) or 1.0)
-        cols += [tt, tt**2]
-    if n - len(cols) >= 3:
-        return _residual_scatter(np.column_stack(cols), y)
+        trend = [tt, tt**2]
+    for k in range(len(trend), -1, -1):        # t, t^2; then t; then none
+        if n - len(cols) - k >= 3:
+            return _residual_scatter(np.column_stack(cols + trend[:k]), y)
+    cols += trend
     w = 4 if n >= 4 else 3
     C = np.zeros((n - w + 1, n))
     for i in range(n - w + 1):

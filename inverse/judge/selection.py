@@ -50,8 +50,8 @@ def effective_dof(noise: NoiseModel) -> float:
            if not math.isinf(noise.dof[c])]
     if not est:
         return math.inf
-    n_est = sum(n for n, _ in est)
-    return n_est**2 / sum(n**2 / nu for n, nu in est)
+    n_all = sum(len(v) for v in noise.total.values())    # known channels count in N
+    return n_all**2 / sum(n**2 / nu for n, nu in est)
 
 
 def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitTest:
