@@ -129,7 +129,10 @@ class MacroSlip(Extension):
         p = super().spec(fe, base, noise, top)
         lin = fe.linear(base.joint["K_T"])
         start = math.log(base.joint["phi_max"] / lin.a_ref)
-        return Parameter(p.name, start, self.lower, start + 2.0, p.step, p.unit, p.description)
+        # the base joint may already slip past 1e-3 a_ref (e.g. a weak glue zone): the
+        # lower bound then moves with the start, so the bounds always enclose it
+        return Parameter(p.name, start, min(self.lower, start - 6.0), start + 2.0, p.step,
+                         p.unit, p.description)
 
     def starts(self, spec):
         return [spec.start - d for d in (0.0, 1.0, 2.0, 3.0, 4.0, 5.0)]
