@@ -48,8 +48,6 @@ __all__ = ["UpdateSettings", "base_parameters", "base_fit", "headline", "run_upd
 
 #: Fitted by ``update``: the base parameters and phi_max (macro-slip onset, via beta).
 UPDATED_PARAMETERS = BASE_PARAMETERS + ("ln_phimax",)
-#: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
-MICRO_LIMIT = 50.0
 KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 0.5), 6))
 
 
@@ -94,36 +92,6 @@ def load_levels(settings: UpdateSettings):
     return data, mask, noise_model(data, mask)
 
 
-def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
-    """Parameters of the base model and their starts; the start list holds the paper's
-    estimator (``exact``, the fit levels) and three others of chi."""
-    lv = [int(v) for v in data.level[mask]]
-    w1 = math.sqrt(float(data.omega2[0]))
-    chi0, dc0, zv0, f00 = -0.4, 2.0 * float(data.omega2[0]) * 1e-4, float(data.zeta[0]), w1 / (2 * math.pi)
-    try:
-        est = estimate(data, fit_levels=lv, method="exact")
-        if -0.98 < est.chi < -0.005 and est.kappa1_B > 0:
-            chi0, dc0 = est.chi, est.kappa1_B
-            zv0 = est.c_modal / (2.0 * math.sqrt(est.omega2_linear))
-            f00 = math.sqrt(est.omega2_linear) / (2 * math.pi)
-    except ValueError:
-        est = None
-    P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
-         "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
-                             "ln |kappa1| B~ at level 1: the glue's modal damping there"),
-         "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
-                             "viscous modal damping ratio"),
-         "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
-                            "stuck-glue natural frequency of the mode"),
-         "log10_kt": Parameter("log10_kt", math.log10(DEFAULT_KT), 6.0, 11.0, 0.5, "log10 N/m",
-                               "stuck tangential stiffness of the whole glue"),
-         "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
-                                "1", "ln(phi_max / a_ref): macro-slip onset in units of "
-                                "the level-1 glue slip (beta = 0 above its limit)")}
-    starts = [{}] + [{"chi": c} for c in (-0.15, -0.5, -0.8) if abs(c - chi0) > 0.05]
-    return P, starts
-
-
 def base_fit(problem: UpdateProblem, starts, free=BASE_PARAMETERS):
     """The best of the fits from every start."""
     best = None
@@ -132,24 +100,6 @@ def base_fit(problem: UpdateProblem, starts, free=BASE_PARAMETERS):
         if best is None or f.chi2 < best.chi2:
             best = f
     return best
-
-
-@dataclass
-class Headline:
-    """``describe`` of :class:`inverse.update.UpdateProblem`: the headline figures of a
-    parameter set: frequency (Hz) and zeta at the held-out levels, top slip over
-    phi_max, R~ and phi_max (picklable)."""
-
-    fe: DoubleBeamLevels
-    held_out: np.ndarray
-    extension: object = None
-
-    def __call__(self, values: dict) -> dict:
-        pred = self.fe.predict(values, self.extension)
-        h = np.flatnonzero(self.held_out)
-        return {"frequency_hz": pred.frequency_hz[h].tolist(), "zeta": pred.zeta[h].tolist(),
-                "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1]),
-                "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
 
 
 def _ranges(items: list) -> dict:
