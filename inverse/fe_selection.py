@@ -6,9 +6,9 @@ simulator, e.g. the FE double beam and its cause extensions,
 units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
 
 * :func:`cross_validate`: leave-one-level-out over the interior fit levels (the lowest
-  and highest fit level always stay in: they anchor the amplitude range). Each fold is
-  refitted from the candidate's *original* start (the start its full fit began from,
-  never the full optimum, which has seen the left-out level); a fold whose fit or
+  and highest fit level always stay in: they anchor the amplitude range). Each fold
+  repeats the candidate's whole fit: from every one of its *original* starts, the best
+  kept (never from the full optimum, which has seen the left-out level); a fold whose fit or
   prediction fails is counted, and an error over failed folds is ``None`` (``n/a``);
 * :func:`held_out_errors`: the levels outside the fit, predicted by the fit itself.
 
@@ -35,13 +35,13 @@ __all__ = ["FitCandidate", "held_out_errors", "cross_validate", "judge_extension
 @dataclass
 class FitCandidate:
     """A fitted explanation: ``causes`` (() for the base model), its ``problem``, its
-    ``fit`` (None: every start failed), the original ``start`` its fit began from, and
+    ``fit`` (None: every start failed), the original ``starts`` its fit began from, and
     ``excluded`` (why it may not be named, or None)."""
 
     causes: tuple
     problem: UpdateProblem
     fit: Fit | None
-    start: dict = field(default_factory=dict)
+    starts: list = field(default_factory=list)
     excluded: str | None = None
     cv_error: float | None = None
     cv_failed: int = 0
@@ -65,15 +65,17 @@ def held_out_errors(problem: UpdateProblem, values: dict) -> float | None:
     return float(np.sqrt(np.mean(r * r)))
 
 
-def cross_validate(problem: UpdateProblem, result: Fit, start: dict) -> tuple:
+def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-8) -> tuple:
     """Leave-one-level-out rms error over the interior fit levels (module docstring),
-    each fold refitted from ``start``. Returns ``(error or None, failed folds)``."""
+    each fold refitted from every start of ``starts`` (optimizer tolerance ``tol``), the
+    best kept. Returns ``(error or None, failed folds)``."""
     idx = np.flatnonzero(problem.fit_mask)
     r2, failed = [], 0
     for i in idx[1:-1]:
         m = problem.fit_mask.copy()
         m[i] = False
-        f = fit(problem, result.free, start=start, mask=m)
+        f = min((fit(problem, result.free, start=s, mask=m, tol=tol) for s in starts or [{}]),
+                key=lambda f: (not f.success, f.chi2))
         one = np.zeros_like(m)
         one[i] = True
         before = problem.failures
@@ -90,7 +92,7 @@ def cross_validate(problem: UpdateProblem, result: Fit, start: dict) -> tuple:
 def _cv(c: FitCandidate, say) -> None:
     if not c.cv_done and c.fit is not None:
         say(f"cross-validation: {c.name}")
-        c.cv_error, c.cv_failed = cross_validate(c.problem, c.fit, c.start)
+        c.cv_error, c.cv_failed = cross_validate(c.problem, c.fit, c.starts)
         c.cv_done = True
 
 

@@ -135,7 +135,7 @@ class MacroSlip(Extension):
                          p.unit, p.description)
 
     def starts(self, spec):
-        return [spec.start - d for d in (0.0, 1.0, 2.0, 3.0, 4.0, 5.0)]
+        return [spec.start - d for d in (0.0, 2.0, 4.0)]
 
     def reading(self, p, fe, lin, pred):
         return {"beta": pred.joint["beta"], "phi_max_m": pred.joint["phi_max"],

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from cases.double_beam.fe_levels import level_entries
-from cases.double_beam.fe_select import fe_select
+from cases.double_beam.fe_select import chosen_model, fe_select
 from inverse.fe_selection import held_out_errors, prediction_sd
 from inverse.profile import bounded_interval, linear_grid, run_profiles
 
@@ -149,14 +149,6 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
     fe = DoubleBeamLevels.from_data(data, force_scale=force_scale)
     s = fe_select(data, mask, fe, causes, progress)
     return report(data, mask, s)
-
-
-def chosen_model(s: dict):
-    """(extension or None, FitCandidate) of the selected (or closest) candidate."""
-    name = s["chosen"]
-    if name == "none":
-        return None, s["base"]
-    return s["extensions"][name]
 
 
 def report(data, mask, s: dict) -> dict:

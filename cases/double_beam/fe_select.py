@@ -34,7 +34,7 @@ from inverse.estimate import estimate
 from inverse.update import NoiseModel, Parameter, UpdateProblem, fit
 
 __all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable",
-           "fit_base", "fe_select"]
+           "fit_base", "fe_select", "chosen_model"]
 
 #: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
 MICRO_LIMIT = 50.0
@@ -115,14 +115,18 @@ def untestable(data) -> dict:
     return out
 
 
+#: Optimizer tolerance of the selection fits (chi2 to about 1e-6 relative).
+FIT_TOL = 1e-6
+
+
 def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
-    """The best fit from ``starts`` and the start it began from."""
-    best, best_start = None, {}
+    """The best fit from ``starts``, and the starts."""
+    best = None
     for s in starts:
-        f = fit(problem, free, start=s)
+        f = fit(problem, free, start=s, tol=FIT_TOL)
         if best is None or (f.success, -f.chi2) > (best.success, -best.chi2):
-            best, best_start = f, s
-    return best, best_start
+            best = f
+    return best, list(starts)
 
 
 def _problem(base_problem, fe, ext, base_pred, top):
@@ -137,7 +141,7 @@ def _problem(base_problem, fe, ext, base_pred, top):
 
 def _fit_extension(problem, ext, start_values, chi_starts):
     """Multi-start fit of ``ext`` (its starts x ``chi_starts``) from ``start_values``;
-    (fit or None, its start)."""
+    (fit or None, the starts)."""
     free = BASE_PARAMETERS + tuple(ext.parameter_names)
     specs = [problem.parameters[n] for n in ext.parameter_names]
     starts = [dict(start_values, chi=chi, **s0) for s0 in ext.start_sets(specs)
@@ -175,14 +179,17 @@ def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
     top = int(np.flatnonzero(mask).max())
     skip = untestable(data)
     exts, singles = {}, []
-    chi_starts = sorted({bfit.values["chi"], -0.5})
+    # chi from the base optimum; macro-slip also from -0.5 (a slip onset among the
+    # levels bends the top ones, which a deeper chi then need not do)
+    chi_wide = sorted({bfit.values["chi"], -0.5})
     for cause in (causes or EXTENSIONS):
         if cause in skip:
             continue
         say(cause)
         ext = EXTENSIONS[cause]
         prob = _problem(base_problem, fe, ext, base_pred, top)
-        f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
+        f, s = _fit_extension(prob, ext, bfit.values,
+                              chi_wide if cause == "macro-slip" else [bfit.values["chi"]])
         c = FitCandidate((cause,), prob, f, s)
         if f is not None and _inactive(ext, f):
             c.excluded = "its effect fitted to zero (the base model)"
@@ -205,3 +212,11 @@ def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
     judged = judge_extensions(base, [c for _, c in exts.values()], jn, progress=say)
     return {"fe": fe, "noise": noise, "judge_noise": jn, "base": base, "extensions": exts,
             "judged": judged, "untested": skip, "chosen": judged["selection"].best}
+
+
+def chosen_model(s: dict):
+    """(extension or None, FitCandidate) of the selected (or closest) candidate."""
+    name = s["chosen"]
+    if name == "none":
+        return None, s["base"]
+    return s["extensions"][name]
