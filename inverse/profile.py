@@ -154,7 +154,9 @@ def linear_grid(best: Fit, name: str, param, n: int = 6, width: float = 3.0):
     offs = width * se * np.arange(1, n + 1) / n
     down = [max(x - o, param.lower) for o in offs]
     up = [min(x + o, param.upper) for o in offs]
-    dedup = lambda v: [a for i, a in enumerate(v) if a != x and a not in v[:i]]  # noqa: E731
+    tiny = 1e-6 * param.step          # a branch starting on a bound has no points
+    dedup = lambda v: [a for i, a in enumerate(v)  # noqa: E731
+                       if abs(a - x) > tiny and a not in v[:i]]
     return dedup(down), dedup(up)
 
 

@@ -163,3 +163,92 @@ def test_fe_update_recovers_planted_fe_parameters(fe):
     assert best.chi2 < 2 * 16
     for name in ("chi", "ln_dc1", "zeta_v", "f0_hz"):
         assert abs(best.values[name] - BASE[name]) < 3.5 * best.std_error(name), name
+
+
+# ------------------------------------------------- bounds, failures, internal errors
+
+
+def test_optimum_on_a_bound_is_reported_held_and_profiled():
+    """Levels made with chi = -0.001 (beyond the bound -0.005) and no noise: chi2 falls
+    monotonically toward the truth, so the optimum provably sits on the upper bound.
+    The fit says so, gives no linearized error for it, holds it in the covariance and
+    in the prediction sd, and its profile interval ends at the bound."""
+    from inverse.fe_selection import prediction_sd
+    from inverse.profile import bounded_interval
+
+    truth = dict(TRUTH, chi=-0.001)
+    om2, ze = ModalIwan()(truth)
+    noise = NoiseModel(np.full(10, 15.0), np.full(10, 3e-6), "planted")
+    prob = UpdateProblem(ModalIwan(), om2, ze, noise, np.ones(10, dtype=bool), PARAMS)
+    free = ("chi", "ln_dc1", "zv", "w0")
+    best = fit(prob, free, start=dict(truth, chi=-0.3))
+    assert best.values["chi"] == pytest.approx(-0.005, abs=1e-9)
+    assert best.at_bound == {"chi": "upper", "ln_dc1": False, "zv": False, "w0": False}
+    assert math.isnan(best.std_error("chi")) and best.std_error("w0") > 0
+    i = free.index("chi")
+    assert np.all(best.cov[i] == 0) and np.all(best.cov[:, i] == 0)
+    assert best.to_dict()["at_bound"]["chi"] == "upper"
+    # the prediction sd holds chi: any variance given to it changes nothing
+    import dataclasses
+
+    sd_a = prediction_sd(prob, best, np.ones(10, dtype=bool))
+    cov = best.cov.copy()
+    cov[i, i] = 1.0
+    sd_b = prediction_sd(prob, dataclasses.replace(best, cov=cov), np.ones(10, dtype=bool))
+    assert np.all(np.array(sd_a["frequency_hz"]) > 0)
+    np.testing.assert_allclose(sd_a["frequency_hz"], sd_b["frequency_hz"], rtol=1e-12)
+    grids = {"chi": linear_grid(best, "chi", PARAMS["chi"], 4)}
+    assert grids["chi"][1] == []                       # nothing beyond the bound
+    pr = run_profiles(prob, best, grids, free)["chi"]
+    lo, hi = bounded_interval(pr, -0.98, -0.005, "upper")
+    assert hi == -0.005 and lo < -0.005
+
+
+class FailsAbove:
+    """:class:`ModalIwan` that fails (no steady state) for ``chi > limit``."""
+
+    def __init__(self, limit):
+        self.limit = limit
+
+    def __call__(self, v):
+        if v["chi"] > self.limit:
+            raise RuntimeError("no steady state")
+        return ModalIwan()(v)
+
+
+def test_failed_simulations_and_folds_are_counted():
+    """A simulator failing over part of the parameter space: the fit counts its failed
+    simulations; leave-one-out folds whose every fit fails give no error (None), with
+    the failed folds counted."""
+    from inverse.fe_selection import cross_validate
+
+    om2, ze = ModalIwan()(TRUTH)
+    noise = NoiseModel(np.full(10, 15.0), np.full(10, 3e-6), "planted")
+    prob = UpdateProblem(FailsAbove(-0.5), om2, ze, noise, np.ones(10, dtype=bool), PARAMS)
+    free = ("chi", "ln_dc1", "zv", "w0")
+    f = fit(prob, free, start=dict(TRUTH, chi=-0.52))
+    assert f.failed_simulations > 0 and prob.failures >= f.failed_simulations
+    always = UpdateProblem(FailsAbove(-2.0), om2, ze, noise, np.ones(10, dtype=bool), PARAMS)
+    err, failed = cross_validate(always, f, [TRUTH])
+    assert err is None and failed == 8
+    ok = UpdateProblem(ModalIwan(), om2, ze, noise, np.ones(10, dtype=bool), PARAMS)
+    good = fit(ok, free, start=TRUTH)
+    err, failed = cross_validate(ok, good, [TRUTH])
+    assert failed == 0 and err < 1e-3
+
+
+def test_inconsistent_bounds_are_an_internal_failure_not_bad_input(capsys):
+    """Bounds that enclose nothing raise InternalError; the CLI reports it in one line
+    with exit status 1 (not 2, which is for bad input)."""
+    from cli.main import run_guarded
+    from inverse.update import InternalError
+
+    om2, ze = ModalIwan()(TRUTH)
+    noise = NoiseModel(np.full(10, 15.0), np.full(10, 3e-6), "planted")
+    bad = dict(PARAMS, chi=Parameter("chi", -0.4, -0.3, -0.6, 0.05))
+    prob = UpdateProblem(ModalIwan(), om2, ze, noise, np.ones(10, dtype=bool), bad)
+    with pytest.raises(InternalError, match="enclose nothing"):
+        fit(prob, ("chi", "w0"))
+    assert run_guarded(lambda: fit(prob, ("chi", "w0"))) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "internal failure" in err[0]

@@ -31,7 +31,7 @@ from cases.double_beam.fe_levels import BASE_PARAMETERS, DEFAULT_KT, DoubleBeamL
 from inverse import judge
 from inverse.fe_selection import FitCandidate, judge_extensions
 from inverse.estimate import estimate
-from inverse.update import NoiseModel, Parameter, UpdateProblem, fit
+from inverse.update import InternalError, NoiseModel, Parameter, UpdateProblem, fit
 
 __all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable",
            "fit_base", "fe_select", "chosen_model"]
@@ -166,8 +166,14 @@ def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
     ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
     :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason) and
     ``chosen`` (name of the selected candidate: the closest one when unexplained)."""
-    say = progress or (lambda s: None)
-    fe = fe or DoubleBeamLevels.from_data(data)
+    try:
+        return _select(data, mask, fe or DoubleBeamLevels.from_data(data), causes,
+                       progress or (lambda s: None))
+    except ValueError as exc:          # the input was checked before: ours, not the user's
+        raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
+
+
+def _select(data, mask, fe, causes, say) -> dict:
     jn, noise = fe_noise(data)
     P, starts = base_parameters(data, mask, fe)
     base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
@@ -179,17 +185,16 @@ def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
     top = int(np.flatnonzero(mask).max())
     skip = untestable(data)
     exts, singles = {}, []
-    # chi from the base optimum; macro-slip also from -0.5 (a slip onset among the
-    # levels bends the top ones, which a deeper chi then need not do)
-    chi_wide = sorted({bfit.values["chi"], -0.5})
+    # chi from the base optimum and from -0.5 (an extension can move chi far: a slip
+    # onset or a hardening bends the top levels, which chi then need not do)
+    chi_starts = sorted({bfit.values["chi"], -0.5})
     for cause in (causes or EXTENSIONS):
         if cause in skip:
             continue
         say(cause)
         ext = EXTENSIONS[cause]
         prob = _problem(base_problem, fe, ext, base_pred, top)
-        f, s = _fit_extension(prob, ext, bfit.values,
-                              chi_wide if cause == "macro-slip" else [bfit.values["chi"]])
+        f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
         c = FitCandidate((cause,), prob, f, s)
         if f is not None and _inactive(ext, f):
             c.excluded = "its effect fitted to zero (the base model)"

@@ -14,16 +14,16 @@ judge selects.
    :func:`inverse.judge.select` (fit test, cost per cause, held-out gain > 1, noise of
    :func:`inverse.judge.noise_model`). The updated model is the selected one (the
    closest candidate when the answer is ``unexplained``, and the report says so);
-3. the profile of ``log10_kt`` (each K_T its own model, grip re-calibrated to 252.0 Hz;
-   a better optimum there is adopted, K_T is then *fitted* on the grid) and profile
-   likelihoods (:mod:`inverse.profile`) of the fitted parameters on a bound
-   (``--profiles all``: of every fitted parameter), as executor tasks; the others get
-   linearized intervals;
+3. profile likelihoods (:mod:`inverse.profile`) of the fitted parameters on a bound,
+   as executor tasks; the others get linearized intervals. With ``--profiles all``:
+   of every fitted parameter, and of ``log10_kt`` (each K_T its own model, grip
+   re-calibrated to 252.0 Hz; a grid value is adopted only when it lowers chi2 by more
+   than the cost of one parameter, :data:`FREE_COST`; K_T is then *fitted* on the grid);
 4. along the profiles of what the data do not determine, the range of every headline
    figure: predicted frequency and damping at the held-out levels, top slip over
    ``phi_max``;
-5. the same figures after refitting with each assumed property changed
-   (:mod:`cases.double_beam.update_assumptions`).
+5. with ``--assumptions``, the same figures after refitting with each assumed
+   property changed (:mod:`cases.double_beam.update_assumptions`).
 
 The force scale (N per excitation unit) is not a parameter: every simulated omega^2 and
 zeta is exactly invariant to it (:mod:`cases.double_beam.joint_setup`); R~, phi_max and
@@ -70,7 +70,7 @@ class UpdateSettings:
     confidence: float = 0.95
     kt_grid: tuple = KT_GRID
     profile_points: int = 4
-    assumptions: bool = True
+    assumptions: bool = False
     profiles: str = "bound"
 
     def __post_init__(self):
@@ -118,11 +118,19 @@ def problem_digest(data, mask, settings: UpdateSettings) -> str:
     return h.hexdigest()
 
 
+#: chi2 drop that frees an assumed parameter (K_T): the judge's cost of one parameter
+#: (AIC, :mod:`inverse.judge`).
+FREE_COST = 2.0
+
+
 def _adopt(problem, best, profiles):
-    """A profile point better than ``best`` (a grid K_T, a second optimum): refit there."""
-    for pr in profiles.values():
+    """A profile point better than ``best`` refitted there: a second optimum of the
+    fitted parameters at any drop; a grid value of an assumed one (K_T) only when it
+    lowers chi2 by more than :data:`FREE_COST` (it then costs one parameter)."""
+    for name, pr in profiles.items():
         low = min(pr.points, key=lambda p: p.chi2)
-        if low.values is not None and low.chi2 < best.chi2 - 1e-6:
+        cost = 1e-6 if name in best.free else FREE_COST
+        if low.values is not None and low.chi2 < best.chi2 - cost:
             again = fit(problem, best.free, start=low.values)
             best = again if again.chi2 <= low.chi2 else fit(problem, (), start=low.values)
     return best
@@ -142,12 +150,14 @@ def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
     P, free = problem.parameters, best.free
     t_sel = time.perf_counter() - t0
     store = None if store is None else (store, problem_digest(data, mask, settings))
-    kt = best.values["log10_kt"]
-    kt_grid = {"log10_kt": ([g for g in sorted(settings.kt_grid, reverse=True) if g < kt],
-                            [g for g in sorted(settings.kt_grid) if g > kt])}
-    profiles = run_profiles(problem, best, kt_grid, free, settings.confidence,
-                            executor=executor, progress=progress, store=store)
-    best = _adopt(problem, best, profiles)
+    profiles = {}
+    if settings.profiles == "all":
+        kt = best.values["log10_kt"]
+        kt_grid = {"log10_kt": ([g for g in sorted(settings.kt_grid, reverse=True) if g < kt],
+                                [g for g in sorted(settings.kt_grid) if g > kt])}
+        profiles = run_profiles(problem, best, kt_grid, free, settings.confidence,
+                                executor=executor, progress=progress, store=store)
+        best = _adopt(problem, best, profiles)
     names = [n for n in free if settings.profiles == "all" or best.at_bound.get(n)]
     grids = {n: linear_grid(best, n, P[n], settings.profile_points) for n in names}
     if grids:

@@ -55,9 +55,10 @@ def register(subparsers) -> None:
                              "resumes)")
     parser.add_argument("--profiles", choices=("bound", "all"), default="bound",
                         help="profile likelihoods of the fitted parameters on a bound "
-                             "(others linearized), or of all of them (slower)")
-    parser.add_argument("--no-assumptions", action="store_true",
-                        help="skip the refits under changed assumed properties")
+                             "(others linearized), or of all of them and of K_T (slower)")
+    parser.add_argument("--assumptions", action="store_true",
+                        help="also refit under changed assumed properties (E, rho, masses, "
+                             "glue elements; slower)")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     add_executor_arguments(parser)
     parser.set_defaults(func=run)
@@ -69,7 +70,7 @@ def run(args) -> int:
 
     settings = UpdateSettings(data_path=args.data, mode_label=args.mode,
                               fit_levels=args.fit_levels, force_scale=args.force_scale,
-                              profiles=args.profiles, assumptions=not args.no_assumptions)
+                              profiles=args.profiles, assumptions=args.assumptions)
     spec = executor_from_args(args)
     store = None if args.out is None else str(Path(args.out) / "profiles")
     result = run_update(settings, executor=spec, progress=True, store=store)
