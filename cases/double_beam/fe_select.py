@@ -3,7 +3,8 @@
 :func:`fe_select` fits, on the fit levels, the base FE model
 (:mod:`cases.double_beam.fe_levels`) and the FE realization of every cause the data can
 test (:mod:`cases.double_beam.fe_causes`), then pairs of the best single cause with
-each other cause that earned its cost alone, and lets the one judge choose
+each other cause that earned its cost alone (unless the best single is already so good
+that no pair could outweigh it), and lets the one judge choose
 (:func:`inverse.fe_selection.judge_extensions` -> :func:`inverse.judge.select`: fit
 test, cost per cause, held-out gain > 1; ``unexplained`` when no candidate brings the
 fit levels within their noise).
@@ -203,7 +204,10 @@ def _select(data, mask, fe, causes, say) -> dict:
     ic = {c.name: c.fit.chi2 + 2 * c.fit.k + judge.T_CAUSE
           for c in singles if c.fit is not None and not c.excluded}
     base_ic = bfit.chi2 + 2 * bfit.k
-    if ic:
+    # a pair (one more parameter, one more cause) has IC >= 2 (k + 1) + 2 T: when the
+    # best single is already below that, no pair can outweigh it, so none is fitted
+    best_single = min(ic.values(), default=math.inf)
+    if ic and best_single > 2 * (bfit.k + 2) + 2 * judge.T_CAUSE:
         first = min(ic, key=ic.get)
         for other in sorted(ic, key=ic.get):
             if other == first or ic[other] >= base_ic:

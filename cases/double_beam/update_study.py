@@ -69,7 +69,7 @@ class UpdateSettings:
     force_scale: float = 1.0
     confidence: float = 0.95
     kt_grid: tuple = KT_GRID
-    profile_points: int = 4
+    profile_points: int = 3
     assumptions: bool = False
     profiles: str = "bound"
 
