@@ -32,6 +32,7 @@ Usage::
 
     python benchmarks/bench_fe_update.py            # about 1-2 minutes
     python benchmarks/bench_fe_update.py --no-update
+    python benchmarks/bench_fe_update.py --no-campaign
 """
 from __future__ import annotations
 
@@ -112,7 +113,7 @@ def update_benchmark() -> None:
     from runs.executor import ExecutorSpec
 
     print("2. model updating, fit levels 1-7 (model choice by the judge, bound profiles)")
-    for spec in (ExecutorSpec("processes", 2), "serial"):
+    for spec in ("serial", ExecutorSpec("processes", 2)):
         ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         c0, w0 = time.process_time(), time.perf_counter()
         r = run_update(executor=spec)
@@ -134,10 +135,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=9)
     ap.add_argument("--no-update", action="store_true")
+    ap.add_argument("--no-campaign", action="store_true")
     args = ap.parse_args()
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.2f}")
-    campaign_benchmark(args.repeat)
+    if not args.no_campaign:
+        campaign_benchmark(args.repeat)
     if not args.no_update:
         update_benchmark()
 
