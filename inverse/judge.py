@@ -49,7 +49,7 @@ from scipy import stats
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
            "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
-           "fit_test", "Candidate", "Selection", "select", "Bounded", "at_bound"]
+           "fit_test", "effective_dof", "Candidate", "Selection", "select", "Bounded", "at_bound"]
 
 #: Tail probability below which a fit leaves the data outside their noise.
 P_UNEXPLAINED = 1e-3
@@ -58,7 +58,7 @@ T_CAUSE = 6.0
 #: Weight ratio to the named explanation from which another one makes it ambiguous.
 W_AMBIGUOUS = 1.0 / 3.0
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
-MIN_REPEAT_DOF = 3
+MIN_REPEAT_DOF = 6
 #: Noise floors: relative for omega2 and zeta, absolute for other channels.
 FLOORS = {"omega2": 1e-9, "zeta": 1e-7}
 _DEFAULT_FLOOR = 1e-2
@@ -239,7 +239,9 @@ class FitTest:
                                     else self.denominator_dof)}
 
 
-def _effective_dof(noise: NoiseModel) -> float:
+def effective_dof(noise: NoiseModel) -> float:
+    """Degrees of freedom of the noise's estimated part, channels combined (module doc;
+    inf when every channel is known)."""
     est = [(len(noise.total[c]), noise.dof[c]) for c in noise.total
            if not math.isinf(noise.dof[c])]
     if not est:
@@ -253,7 +255,7 @@ def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitT
     (module doc)."""
     dof = int(n_data - n_params)
     rms = float(np.sqrt(chi2 / max(n_data, 1)))
-    nu = _effective_dof(noise)
+    nu = effective_dof(noise)
     if dof <= 0:
         return FitTest(None, dof, nu, f"none possible ({n_data} data, {n_params} "
                                       f"parameters)", rms)
@@ -357,7 +359,8 @@ def select(candidates, noise: NoiseModel, t_cause: float = T_CAUSE,
 @dataclass
 class Bounded:
     """A fitted parameter with its bounds: ``at_bound`` and which bound, and its
-    interval with the kind of interval (``profile``, ``covariance``, ...)."""
+    interval with the kind of interval (``profile``, ``covariance``, ...). In JSON an
+    infinite bound is null."""
 
     name: str
     value: float
@@ -369,7 +372,9 @@ class Bounded:
     interval_kind: str | None = None
 
     def to_json(self) -> dict:
-        return {"value": self.value, "lower_bound": self.lower, "upper_bound": self.upper,
+        fin = lambda v: float(v) if np.isfinite(v) else None  # noqa: E731
+        return {"value": self.value, "lower_bound": fin(self.lower),
+                "upper_bound": fin(self.upper),
                 "at_bound": self.at_bound, "which_bound": self.which,
                 "interval": None if self.interval is None else list(self.interval),
                 "interval_kind": self.interval_kind}

@@ -15,10 +15,13 @@ from cli.main import main
 from ident.measured import write_measured
 from ident.modal_data import MeasuredData
 from inverse.diagnose import ALL_CAUSES, diagnose
-from inverse.diagnosis_fit import solve_nonneg
-from inverse.diagnosis_models import (MODELS, box_cox, contact_shape, drift_shape,
-                                      slip_shapes)
-from inverse.diagnosis_noise import interpolation_scatter
+from inverse.diagnosis.fit import solve_nonneg
+from inverse.diagnosis.causes.geometric_hardening import contact_shape
+from inverse.diagnosis.causes.macro_slip import slip_shapes
+from inverse.diagnosis.causes.nonproportional_amplitude import box_cox
+from inverse.diagnosis.causes.thermal_drift import drift_shape
+from inverse.diagnosis.models import MODELS
+from inverse.judge import smooth_scatter
 from inverse.iwan_modal import kappa_ratio, zeta_with_joint
 from joints.describing import describing_function
 from joints.iwan import IwanParameters
@@ -82,16 +85,16 @@ def test_solve_nonneg_against_bounded_least_squares():
         np.testing.assert_allclose(x[g], ref, atol=1e-8)
 
 
-def test_interpolation_scatter_ignores_a_smooth_trend():
+def test_smooth_scatter_ignores_a_smooth_trend():
     rng = np.random.default_rng(1)
     x = np.sort(rng.uniform(-5, 0, 4000))
     noise = 0.3 * rng.standard_normal(x.size)
-    s0, dof = interpolation_scatter(x, noise)
-    s1, _ = interpolation_scatter(x, noise + 2 * x + 0.1 * x**2)
-    assert dof == x.size - 2
+    s0, dof = smooth_scatter(x, noise)
+    s1, _ = smooth_scatter(x, noise + 2 * x + 0.1 * x**2 + 0.01 * x**3)
+    assert dof == x.size - 3
     assert s0 == pytest.approx(0.3, rel=0.05) and s1 == pytest.approx(s0, rel=1e-3)
-    # a linear trend cancels exactly on any spacing
-    assert interpolation_scatter(x[:9], 3 - 2 * x[:9])[0] == pytest.approx(0.0, abs=1e-12)
+    # a quadratic trend cancels exactly on any spacing
+    assert smooth_scatter(x[:9], 3 - 2 * x[:9] + x[:9] ** 2)[0] == pytest.approx(0.0, abs=1e-9)
 
 
 # --------------------------------------------------------------------------- decision rules
@@ -112,7 +115,7 @@ def _table(omega2, zeta, control="force", excitation=None, response=None, run=No
 
 
 def _iwan(chi, s, w2_0=(2 * np.pi * 80) ** 2, zeta0=0.005, growth=1.0):
-    """Planted truth: eq. (2), (3) of inverse.diagnosis_models with K1 giving a damping
+    """Planted truth: eq. (2), (3) of inverse.diagnosis.models with K1 giving a damping
     growth ``growth`` x zeta0 at the top level."""
     K1 = 2 * w2_0 * zeta0 * growth
     om2 = w2_0 - kappa_ratio(chi, "exact") * K1 * s ** (chi + 1)
