@@ -4,7 +4,10 @@ Each cause of ``shared/spec/diagnosis.md`` with a physical mechanism becomes one
 :class:`Extension` of the FE model of :mod:`cases.double_beam.fe_levels`: one extra
 parameter (nested: its ``none`` value gives back the base model), a realization in the
 first-harmonic balance (:mod:`fe.hb_resonance`: an element, a per-level stiffness scale
-or a per-level force) and the physical reading of the fitted value. SI units.
+or a per-level force) and the physical reading of the fitted value. SI units. Each
+extension fills the ``FE_REALIZATION`` slot of its plug-in cause
+(``inverse/diagnosis/causes/<id>.py``); adding a cause with an FE realization means its
+plug-in file and one class here.
 
 ``macro-slip`` (:class:`MacroSlip`). The four-parameter Iwan joint leaves micro-slip at
 ``phi_max`` (Segalman 2005, J. Appl. Mech. 72, 752: beyond it the joint slides as a
@@ -55,6 +58,7 @@ import math
 import numpy as np
 
 from fe.hb_resonance import CubicSpring, QuadraticDamper
+from inverse.diagnosis.causes import CATALOGUE
 from inverse.update import Parameter
 
 __all__ = ["AIR_DENSITY", "ALUMINIUM_DLNE_DT", "Extension", "MacroSlip", "AirDrag",
@@ -253,3 +257,8 @@ class Combined(Extension):
 
 EXTENSIONS = {e.cause: e for e in (MacroSlip(), AirDrag(), CubicHardening(), ThermalDrift(),
                                    ForceCompression())}
+
+# fill each plug-in cause's slot for its FE realization (inverse/diagnosis/causes/)
+for _cid, _ext in EXTENSIONS.items():
+    if _cid in CATALOGUE:
+        CATALOGUE[_cid].FE_REALIZATION = _ext
