@@ -29,7 +29,7 @@ from inverse.judge import W_AMBIGUOUS, Candidate, fit_test, select
 from inverse.update import Fit, UpdateProblem, fit
 
 __all__ = ["FitCandidate", "held_out_errors", "cross_validate", "judge_extensions",
-           "prediction_sd"]
+           "prediction_sd", "fit_test_of"]
 
 
 @dataclass

@@ -214,7 +214,8 @@ def markdown(s: dict) -> str:
     rows = "\n".join(f"| {_LABEL.get(n, n)} | {p['value']:.7g} | "
                      f"{_fmt((p.get('interval') or [None, None])[0])} .. "
                      f"{_fmt((p.get('interval') or [None, None])[1])} | {p.get('status', '')} | "
-                     f"{p['kind']} | {p['description']} |" for n, p in s["parameters"].items())
+                     f"{p['kind']}{' (at ' + p['at_bound'] + ' bound)' if p.get('at_bound') else ''} | "
+                     f"{p['description']} |" for n, p in s["parameters"].items())
     lv = "\n".join(f"| {r['level']}{'*' if r['held_out'] else ''} | "
                    f"{r['measured']['frequency_hz']:.5f} | {r['model']['frequency_hz']:.5f} | "
                    f"{r['error_hz']:+.4f} | {r['measured']['zeta']:.6f} | {r['model']['zeta']:.6f} | "
@@ -241,12 +242,15 @@ element per glue node, first-harmonic balance with the exact describing function
 phase resonance of the mode) is fitted by weighted least squares to omega^2 and zeta of
 the fit levels. Noise: {s['noise']['source']}: sigma_omega2 =
 {s['noise']['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = {s['noise']['sigma_zeta'][0]:.3g}.
-Intervals: profile likelihood at {int(100 * s['confidence'])} %, widened by the misfit
-(chi2/dof) when the model misfits.
+Model: **{s['model']}** (cause `{s['cause']}`), chosen by the one judge as in `diagnose
+--case` (fit test p = {s['fit_test']['p_value']:.2g}, {s['fit_test']['test']}).
+Intervals at {int(100 * s['confidence'])} %: profile likelihood for a parameter on its
+bound (the bound then ends the interval) or with `--profiles all`, else linearized;
+widened by the misfit (chi2/dof) when the model misfits.
 
 ## Parameters
 
-| parameter | value | interval | status | kind | meaning |
+| parameter | value | interval | status | kind (at_bound) | meaning |
 | --- | --- | --- | --- | --- | --- |
 {rows}
 
