@@ -67,7 +67,7 @@ def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
          "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
                                 "1", "ln(phi_max / a_ref): macro-slip onset in units of "
                                 "the level-1 glue slip (beta = 0 above its limit)")}
-    starts = [{}] + [{"chi": c} for c in (-0.15, -0.5, -0.8) if abs(c - chi0) > 0.05]
+    starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
     return P, starts
 
 
