@@ -253,6 +253,9 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
     if fixed:
         values.update(fixed)
     for p in pars:
+        if not (math.isfinite(p.step) and p.step > 0):
+            raise InternalError(f"internal failure: parameter {p.name} has step {p.step!r} "
+                                f"(must be a positive number)")
         if not p.lower < p.upper:
             raise InternalError(f"internal failure: parameter {p.name} has bounds "
                                 f"[{p.lower:.6g}, {p.upper:.6g}] that enclose nothing")

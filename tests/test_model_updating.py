@@ -252,3 +252,29 @@ def test_inconsistent_bounds_are_an_internal_failure_not_bad_input(capsys):
     assert run_guarded(lambda: fit(prob, ("chi", "w0"))) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "internal failure" in err[0]
+
+
+def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
+    """An FE cause whose parameter step is not a number (as a degenerate base fit can
+    make it): the FE model choice goes on, that candidate is reported as a failed fit
+    with the reason, and the failure is counted."""
+    from cases.double_beam import fe_causes
+    from cases.double_beam.fe_diagnosis import report
+    from cases.double_beam.fe_select import fe_select
+    from ident.modal_data import MeasuredData
+
+    monkeypatch.setattr(fe_causes.CubicHardening, "step",
+                        lambda self, fe, base, noise, top: float("nan"))
+    om2, ze = ModalIwan()(TRUTH)
+    rng = np.random.default_rng(4)
+    data = MeasuredData(level=np.arange(1, 11), excitation=EXC,
+                        omega2=(2 * np.pi * 252.0) ** 2 / om2[0] * om2
+                        * (1 + 5e-6 * rng.standard_normal(10)),
+                        zeta=ze * (1 + 2e-4 * rng.standard_normal(10)),
+                        mode=np.ones(10, dtype=int), run_order=np.arange(1, 11))
+    s = fe_select(data, np.arange(10) < 7, causes=("geometric-hardening",))
+    c = s["extensions"]["geometric-hardening"][1]
+    assert c.fit is None and "step" in c.excluded
+    fe = report(data, np.arange(10) < 7, s)["fe"]
+    assert fe["failures"]["fits"] == 1
+    assert "step" in fe["evidence"]["geometric-hardening"]["why_not"]

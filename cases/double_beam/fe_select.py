@@ -194,8 +194,14 @@ def _select(data, mask, fe, causes, say) -> dict:
             continue
         say(cause)
         ext = EXTENSIONS[cause]
-        prob = _problem(base_problem, fe, ext, base_pred, top)
-        f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
+        try:
+            prob = _problem(base_problem, fe, ext, base_pred, top)
+            f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
+        except (InternalError, ValueError, ArithmeticError) as exc:
+            # one cause that cannot be set up is counted and reported, not fatal
+            exts[cause] = (ext, FitCandidate((cause,), base_problem, None, [],
+                                             f"its fit failed: {exc}"))
+            continue
         c = FitCandidate((cause,), prob, f, s)
         if f is not None and _inactive(ext, f):
             c.excluded = "its effect fitted to zero (the base model)"
