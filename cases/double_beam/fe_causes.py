@@ -5,9 +5,10 @@ Each cause of ``shared/spec/diagnosis.md`` with a physical mechanism becomes one
 parameter (nested: its ``none`` value gives back the base model), a realization in the
 first-harmonic balance (:mod:`fe.hb_resonance`: an element, a per-level stiffness scale
 or a per-level force) and the physical reading of the fitted value. SI units. Each
-extension fills the ``FE_REALIZATION`` slot of its plug-in cause
-(``inverse/diagnosis/causes/<id>.py``); adding a cause with an FE realization means its
-plug-in file and one class here.
+extension is found by the id of its plug-in cause (``inverse/diagnosis/causes/<id>.py``,
+checked at import; the plug-in's ``FE_REALIZATION`` slot stays empty: ``inverse`` cannot
+import ``cases``); adding a cause with an FE realization means its plug-in file and one
+class here.
 
 ``macro-slip`` (:class:`MacroSlip`). The four-parameter Iwan joint leaves micro-slip at
 ``phi_max`` (Segalman 2005, J. Appl. Mech. 72, 752: beyond it the joint slides as a
@@ -259,7 +260,7 @@ class Combined(Extension):
 EXTENSIONS = {e.cause: e for e in (MacroSlip(), AirDrag(), CubicHardening(), ThermalDrift(),
                                    ForceCompression())}
 
-# fill each plug-in cause's slot for its FE realization (inverse/diagnosis/causes/)
-for _cid, _ext in EXTENSIONS.items():
-    if _cid in CATALOGUE:
-        CATALOGUE[_cid].FE_REALIZATION = _ext
+# every FE realization is a cause of the plug-in catalogue (inverse/diagnosis/causes/)
+_unknown = sorted(set(EXTENSIONS) - set(CATALOGUE))
+if _unknown:
+    raise ImportError(f"FE realizations of causes not in the catalogue: {_unknown}")
