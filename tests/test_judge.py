@@ -21,13 +21,26 @@ def test_pooled_repeats_recover_planted_sd():
     assert lo * sd < s < hi * sd
 
 
-def test_smooth_scatter_is_blind_to_a_quadratic_and_finds_the_noise():
-    x = np.log(np.geomspace(0.1, 1.0, 9))
-    assert smooth_scatter(x, 3 + 2 * x - 0.7 * x**2)[0] < 1e-12
+def test_smooth_scatter_is_blind_to_power_laws_and_finds_the_noise():
+    x = np.log(np.geomspace(0.01, 1.0, 9))
+    s = np.exp(x)
+    assert smooth_scatter(x, 3 + 2 * x + 0.5 * s ** (1 / 3) - s)[0] < 1e-12
+    # an Iwan-like power law outside the basis: below 1e-3 of its range at ratio 1.8
+    for p in (0.15, 0.55, 0.9):
+        assert smooth_scatter(x, 1 - 0.01 * s**p)[0] < 1e-3 * 0.01
     rng = np.random.default_rng(3)
-    est = [smooth_scatter(x, 3 + x + 0.01 * rng.standard_normal(9))[0] ** 2
+    est = [smooth_scatter(x, 3 + x + 0.01 * rng.standard_normal(9))
            for _ in range(3000)]
-    assert np.mean(est) == pytest.approx(1e-4, rel=0.05)   # unbiased for sigma^2
+    assert {e[1] for e in est} == {4}
+    assert np.mean([e[0] ** 2 for e in est]) == pytest.approx(1e-4, rel=0.05)   # unbiased
+    # with a run order, a quadratic drift in time is not scatter (2 dof fewer)
+    t = np.array([3, 7, 1, 9, 5, 2, 8, 4, 6, 10, 11])
+    x11 = np.log(np.geomspace(0.01, 1.0, 11))
+    sd, dof = smooth_scatter(x11, 1 - 0.01 * np.exp(x11) + 1e-3 * t + 1e-4 * t**2, t)
+    assert dof == 4 and sd < 1e-12
+    # too few levels for the curve: local quadratic contrasts, one dof per window
+    assert smooth_scatter(x[:6], 3 + 2 * x[:6] - 0.7 * x[:6] ** 2) == (
+        pytest.approx(0.0, abs=1e-12), 3)
 
 
 def test_noise_model_from_repeats_splits_identification_and_repeatability():

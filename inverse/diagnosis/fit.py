@@ -30,7 +30,7 @@ import numpy as np
 from inverse.diagnosis.models import Model, Observations, design
 
 __all__ = ["Fit", "solve_nonneg", "evaluate", "refine", "fit_model", "fit_folds",
-           "information_criteria"]
+           "profile_interval", "information_criteria"]
 
 
 @dataclass
@@ -144,14 +144,15 @@ def _rss(model, obs, theta, rows, chunk=4096):
 _LAMBDAS = np.array([1e-3, 1e-2, 1e-1, 1.0, 10.0])
 
 
-def refine(model, obs, theta, rows, iters):
+def refine(model, obs, theta, rows, iters, fixed=None):
     """Levenberg-Marquardt on the nonlinear parameters of ``B`` independent problems at
     once (starts, or cross-validation folds): ``theta`` (B, d), ``rows`` (B, N) bool.
 
     Box bounds by clipping. Each iteration is two batched evaluations: the forward-
     difference Jacobians of every problem, then five trial steps each (damping 1e-3 ...
     10 times the diagonal of J^T J); a problem stops when no trial lowers its chi2.
-    Returns the refined theta (B, d)."""
+    ``fixed`` (d,) bool: coordinates held at their start (a profile). Returns the
+    refined theta (B, d)."""
     lo, hi = _bounds(model)
     theta = np.array(theta, float)
     B, d = theta.shape
@@ -173,6 +174,8 @@ def refine(model, obs, theta, rows, iters):
         _, rj, _ = evaluate(model, obs, pts, np.repeat(m, d, axis=0))
         rj = rj.reshape(idx.size, d, -1) * wgt[idx][:, None, :]
         J = (rj - rw[:, None, :]) / step[:, :, None]                    # (b, d, N)
+        if fixed is not None:
+            J[:, np.asarray(fixed, bool), :] = 0.0
         JtJ = np.einsum("bdn,ben->bde", J, J)
         g = np.einsum("bdn,bn->bd", J, rw)
         diag = np.maximum(np.einsum("bdd->bd", JtJ),
@@ -259,3 +262,30 @@ def fit_folds(full: Fit, obs: Observations, trains, iters: int = 12) -> list:
     rows = np.repeat(np.tile(trains, (1, len(obs.channels))), S, axis=0)
     th = refine(full.model, obs, np.tile(starts, (F, 1)), rows, iters)
     return [_finish(full.model, obs, th[i * S:(i + 1) * S], trains[i]) for i in range(F)]
+
+
+def profile_interval(fit: Fit, obs: Observations, j: int, threshold: float,
+                     n_points: int = 13):
+    """Profile interval of nonlinear parameter ``j`` of ``fit``: the range of values on
+    a grid over its box (plus the fitted value) where the chi2 minimized over the other
+    nonlinear parameters (from the fit's starts and its optimum) stays within
+    ``threshold`` of the fit's chi2 (3.84: 95 % for one parameter, Wilks). Returns
+    ``((lower, upper), failures)``; the interval reaches a bound when the bound is
+    inside it."""
+    _, lo, hi, _ = fit.model.nonlinear[j]
+    values = np.unique(np.r_[np.linspace(lo, hi, n_points), fit.theta[j]])
+    starts = np.vstack([fit.theta[None], fit.starts]) if fit.starts is not None \
+        else fit.theta[None]
+    S = starts.shape[0]
+    theta0 = np.repeat(starts, values.size, axis=0)
+    theta0[:, j] = np.tile(values, S)
+    rows = np.tile(fit.train, len(obs.channels))
+    fixed = np.zeros(theta0.shape[1], bool)
+    fixed[j] = True
+    th = refine(fit.model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), 15, fixed)
+    _, r, _ = evaluate(fit.model, obs, th, rows)
+    chi2 = np.sum(r[:, rows] ** 2, axis=1).reshape(S, values.size)
+    chi2 = np.where(np.isfinite(chi2), chi2, np.inf).min(axis=0)
+    failures = int(np.sum(~np.isfinite(chi2)))
+    inside = values[chi2 - min(fit.chi2, chi2.min()) <= threshold]
+    return (float(inside.min()), float(inside.max())), failures

@@ -70,17 +70,21 @@ def _evidence(fits, unavailable, sel):
     return ev
 
 
-def parameter_bounds(fit, obs, rtol: float = 1e-3) -> dict:
+def parameter_bounds(fit, obs, profiles=None, rtol: float = 1e-3) -> dict:
     """Every fitted parameter of ``fit`` as :class:`inverse.judge.Bounded` JSON: the
-    nonlinear ones with their box (``p`` reported as ``chi = p - 1``), the linear ones
-    with ``[0, inf)`` when non-negative, else unbounded."""
+    nonlinear ones with their box (``p`` reported as ``chi = p - 1``) and, for those on
+    a bound, the profile interval of ``profiles`` (``{index: (lo, hi)}``); the linear
+    ones with ``[0, inf)`` when non-negative, else unbounded."""
     out = {}
-    for v, (name, lo, hi, _) in zip(fit.theta, fit.model.nonlinear):
+    profiles = profiles or {}
+    for j, (v, (name, lo, hi, _)) in enumerate(zip(fit.theta, fit.model.nonlinear)):
         shift = -1.0 if name == "p" else 0.0
         on, which = at_bound(v, lo, hi, rtol)
+        iv = profiles.get(j)
         out["chi" if name == "p" else name] = Bounded(
             "chi" if name == "p" else name, float(v + shift), lo + shift, hi + shift,
-            on, which).to_json()
+            on, which, None if iv is None else (iv[0] + shift, iv[1] + shift),
+            None if iv is None else "profile (95 %)").to_json()
     nonneg = fit.model.nonneg(obs.log_r is not None)
     for j, (name, x) in enumerate(zip(fit.model.linear_names(obs.log_r is not None),
                                       fit.linear)):
@@ -97,18 +101,20 @@ def _verdict_json(sel):
             "fit_test": sel.tests[sel.best].to_json()}
 
 
-def _failures(fits, cv, held):
+def _failures(fits, cv, held, profile_failures):
     fits_failed = [k for k, f in fits.items() if f.failed]
     folds = {k: v[3] for k, v in cv.items() if v[3]}
     held_failed = [k for k, v in held.items() if v[2] is not None and v[2].failed]
     return {"fits": len(fits_failed), "folds": sum(folds.values()),
-            "held_out": len(held_failed), "total": len(fits_failed) + sum(folds.values())
-            + len(held_failed), "failed_fits": fits_failed, "failed_folds": folds}
+            "held_out": len(held_failed), "profile_points": profile_failures,
+            "total": len(fits_failed) + sum(folds.values()) + len(held_failed)
+            + profile_failures, "failed_fits": fits_failed, "failed_folds": folds}
 
 
 def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise,
              unavailable, untestable, contradictions, refuted, separability, warnings,
-             predictions, selection_id_only, why_id_only) -> dict:
+             predictions, selection_id_only, why_id_only, profiles,
+             profile_failures) -> dict:
     """The diagnosis as one JSON-ready dict (module doc)."""
     sel = selection
     cause, also, best, rivals = sel.cause, sel.also, sel.best, sel.rivals
@@ -139,7 +145,7 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise,
     ch = len(obs.channels)
     stdres = lambda f: f.residual.reshape(ch, n).T  # noqa: E731
     unfit = [k for k, f in fits.items() if f.aic is None]
-    bounds = parameter_bounds(ext, obs)
+    bounds = parameter_bounds(ext, obs, profiles)
     on_bound = [k for k, b in bounds.items() if b["at_bound"]]
     values = {"omega2": obs.omega2, "zeta": obs.zeta, "response": obs.log_r}
     noise_json = noise.to_json(values)
@@ -180,7 +186,7 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise,
         "verdict_identification_only": id_only,
         "verdict_changes_with_identification_only": changes,
         "identification_only_note": why_id_only,
-        "failures": _failures(fits, cv, held),
+        "failures": _failures(fits, cv, held, profile_failures),
         "untestable": untestable,
         "separability": separability,
         "summary": summary,

@@ -30,21 +30,22 @@ whether it follows from the repeatability.
 from __future__ import annotations
 
 import numpy as np
+from scipy import stats
 
 from ident.measured import MeasuredData
 from ident.modal_data import mean_per_level
 from inverse.contradictions import NoiseLevels, iwan_contradictions
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
 from inverse.diagnosis.cv import held_out_top, leave_one_out, n_top, prediction_intervals
-from inverse.diagnosis.fit import fit_model
-from inverse.diagnosis.models import MODELS, Model, Observations
+from inverse.diagnosis.fit import fit_model, profile_interval
+from inverse.diagnosis.models import MODELS, Observations
 from inverse.diagnosis.noise import one_mode_noise, test_chi2
 from inverse.diagnosis.params import physical_parameters
 from inverse.diagnosis.report import assemble
 from inverse.diagnosis.separability import separability
 from inverse.diagnosis.text import chi_at_bound, own_contradictions
-from inverse.judge import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, effective_dof,
-                           select)
+from inverse.judge import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, at_bound,
+                           effective_dof, select)
 
 __all__ = ["CAUSES", "ALL_CAUSES", "T_CAUSE", "W_AMBIGUOUS", "observations_from",
            "diagnose"]
@@ -155,11 +156,6 @@ def _contradictions(d, obs, noise, base_zeta, base_params):
             + own_contradictions(dm, base_params, zm, levels))
 
 
-def _verdict(fits, obs, noise, cv, refuted):
-    sel = select(_candidates(fits, cv, obs, refuted), noise)
-    return sel
-
-
 def _identification_only(models, obs, noise, cv, refuted):
     """The verdict with the identification's noise alone (refitted), or None with why."""
     if not noise.has_identification():
@@ -171,10 +167,22 @@ def _identification_only(models, obs, noise, cv, refuted):
     obs.sigma = only.total
     try:
         fits = _fit_all(models, obs)
-        sel = _verdict(fits, obs, only, cv, refuted)
+        sel = select(_candidates(fits, cv, obs, refuted), only)
     finally:
         obs.sigma = sig
     return sel, None
+
+
+def _profiles(fit, obs, dof):
+    """Profile intervals of the nonlinear parameters of ``fit`` on a bound, and the
+    failed profile points."""
+    out, failed = {}, 0
+    threshold = float(stats.f.ppf(0.95, 1, dof)) if np.isfinite(dof) else 3.841
+    for j, (v, (_, lo, hi, _)) in enumerate(zip(fit.theta, fit.model.nonlinear)):
+        if at_bound(v, lo, hi)[0]:
+            out[j], k = profile_interval(fit, obs, j, threshold)
+            failed += k
+    return out, failed
 
 
 def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
@@ -197,7 +205,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     found = _contradictions(d, obs, noise, base_zeta, params["none"])
     refuted = any(c.kind in _REFUTING for c in found)
     cv = {k: leave_one_out(f, obs) for k, f in fits.items()}
-    sel = _verdict(fits, obs, noise, cv, refuted)
+    sel = select(_candidates(fits, cv, obs, refuted), noise)
     best = sel.best
     if sel.unexplained:
         f = fits[best]
@@ -222,6 +230,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     top_fit = held[best][2]
     predictions = ([] if top_fit is None or top_fit.failed else
                    prediction_intervals(top_fit, obs, effective_dof(noise)))
+    profiles, profile_failures = _profiles(fits[best], obs, effective_dof(noise))
     if sel.cause == "none" or sel.rivals or np.unique(obs.levels).size < 8:
         sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)
     else:
@@ -233,4 +242,5 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         held=held, n_top=n_top(np.unique(obs.levels).size), noise=noise,
         unavailable=unavailable, untestable=untestable, contradictions=found,
         refuted=refuted, separability=sep, warnings=warnings, predictions=predictions,
-        selection_id_only=sel_id, why_id_only=why_id)
+        selection_id_only=sel_id, why_id_only=why_id, profiles=profiles,
+        profile_failures=profile_failures)
