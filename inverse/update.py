@@ -26,12 +26,10 @@ Bounds that do not enclose a non-empty interval, or an optimizer error, raise
 AICc (known noise): ``chi2 + 2k + 2k(k+1)/(n-k-1)`` with ``n`` the number of residuals,
 ``k`` the number of fitted parameters.
 
-Noise (:func:`noise_model`): the data's own ``omega2_std`` / ``zeta_std`` columns when
-present (the identification's uncertainty, shared/spec/diagnosis.md); otherwise the
-scatter of the fit levels about a *free* power law per channel, ``y = a + b (e/e_1)^p``
-(three parameters per channel, frequency and damping untied): the most flexible
-monotone amplitude law, independent of the models being compared, so a misfit of the
-physics cannot hide in the noise level (the spec's warning); ``s^2 = RSS/(n - 3)``.
+Noise: the :class:`NoiseModel` given to the problem, in the FE loop the totals of the one
+judge's noise model (:func:`inverse.judge.noise_model`, via
+:func:`cases.double_beam.fe_select.fe_noise`): the identification's stds plus the test's
+repeatability, the same noise as the one-mode diagnosis.
 """
 from __future__ import annotations
 
@@ -42,8 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-__all__ = ["InternalError", "Parameter", "NoiseModel", "power_law_noise", "noise_model",
-           "UpdateProblem", "Fit", "fit"]
+__all__ = ["InternalError", "Parameter", "NoiseModel", "UpdateProblem", "Fit", "fit"]
 
 _FAILED = 1e4   # residual of a failed simulation, in noise units (counted, never reported)
 #: A free parameter this close to a bound (in units of its step) is at the bound.
@@ -82,45 +79,6 @@ class NoiseModel:
     def to_dict(self) -> dict:
         return {"sigma_omega2": self.sigma_omega2, "sigma_zeta": self.sigma_zeta,
                 "source": self.source, "dof": self.dof}
-
-
-def _free_power_law_rss(x, y):
-    """RSS of ``y = a + b x^p`` (``x = e/e_1 >= 1``) over ``p`` in (0, 3]; linear in
-    ``a, b`` for each ``p`` (variable projection on a fine grid of ``p``)."""
-    best = math.inf
-    for p in np.linspace(0.02, 3.0, 299):
-        A = np.column_stack([np.ones_like(x), x ** p])
-        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-        best = min(best, float(np.sum((A @ coef - y) ** 2)))
-    return best
-
-
-def power_law_noise(excitation, omega2, zeta, mask) -> NoiseModel:
-    """Noise of the levels ``mask`` from their scatter about a free power law per
-    channel (module docstring); needs at least 5 levels."""
-    m = np.asarray(mask, dtype=bool)
-    n = int(m.sum())
-    if n < 5:
-        raise ValueError(f"the noise level needs at least 5 fit levels, got {n}")
-    e = np.asarray(excitation, dtype=float)
-    x = e[m] / e[m].min()
-    L = e.size
-    s_w = math.sqrt(_free_power_law_rss(x, np.asarray(omega2, float)[m]) / (n - 3))
-    s_z = math.sqrt(_free_power_law_rss(x, np.asarray(zeta, float)[m]) / (n - 3))
-    s_w = max(s_w, 1e-9 * float(np.mean(omega2)))
-    s_z = max(s_z, 1e-9)
-    return NoiseModel(np.full(L, s_w), np.full(L, s_z),
-                      f"scatter of the {n} fit levels about a free power law per channel "
-                      f"(y = a + b (e/e1)^p, 3 parameters each)", dof=n - 3)
-
-
-def noise_model(data, mask) -> NoiseModel:
-    """The data's ``omega2_std``/``zeta_std`` columns if present, else
-    :func:`power_law_noise` of the fit levels ``mask``."""
-    if data.omega2_std is not None and data.zeta_std is not None:
-        return NoiseModel(np.asarray(data.omega2_std, float), np.asarray(data.zeta_std, float),
-                          "the data's omega2_std and zeta_std columns")
-    return power_law_noise(data.excitation, data.omega2, data.zeta, mask)
 
 
 @dataclass

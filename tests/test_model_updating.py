@@ -13,22 +13,9 @@ import numpy as np
 import pytest
 
 from inverse.profile import linear_grid, run_profiles, threshold
-from inverse.update import NoiseModel, Parameter, UpdateProblem, fit, power_law_noise
+from inverse.update import NoiseModel, Parameter, UpdateProblem, fit
 
 EXC = 0.005 * 2.0 ** np.arange(10)
-
-
-def test_power_law_noise_recovers_a_planted_noise_level():
-    rng = np.random.default_rng(3)
-    e = 1.05 ** np.arange(80)
-    x = e / e[0]
-    s_w, s_z = 12.0, 2.5e-6
-    om2 = 2.5e6 - 3.0 * x ** 0.7 + s_w * rng.standard_normal(80)
-    ze = 0.0125 + 2e-7 * x ** 0.9 + s_z * rng.standard_normal(80)
-    n = power_law_noise(e, om2, ze, np.ones(80, dtype=bool))
-    assert n.dof == 77
-    assert abs(n.sigma_omega2[0] / s_w - 1) < 0.2
-    assert abs(n.sigma_zeta[0] / s_z - 1) < 0.2
 
 
 class ModalIwan:
