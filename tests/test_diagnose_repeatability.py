@@ -132,3 +132,17 @@ def test_folds_start_from_the_original_starts_not_the_optimum(monkeypatch):
     # from the optimum that saw the left-out level
     np.testing.assert_array_equal(seen[0], np.tile(full.starts, (2, 1)))
     assert not np.any(np.all(np.isclose(full.starts, full.theta), axis=1))
+
+
+def test_estimate_averages_repeats_per_level_and_says_so():
+    from ident.modal_data import mean_per_level
+    from inverse.estimate import estimate
+
+    d = _series(1, repeats=(1, 5, 10))
+    est = estimate(d, method="exact")
+    assert any("repeats averaged per level: 13 rows -> 10 levels" in w
+               for w in est.data_warnings)
+    mean, _ = mean_per_level(d.for_mode(1))
+    assert mean.omega2[0] == pytest.approx(d.omega2[[0, 10]].mean(), rel=1e-15)
+    assert mean.zeta_std[0] == pytest.approx(np.hypot(*d.zeta_std[[0, 10]]) / 2)
+    assert est.chi == pytest.approx(estimate(mean, method="exact").chi, rel=1e-12)
