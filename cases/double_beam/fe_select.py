@@ -153,8 +153,8 @@ def _fit_extension(problem, ext, start_values, chi_starts):
 
 def _inactive(ext, f) -> bool:
     """The extension's parameter sits at its ``none`` value (the base model)."""
-    side = {"lower": ext.lower, "upper": ext.upper}
-    return any(f.at_bound.get(n) and side.get(f.at_bound[n]) in (0.0,)
+    bound = {"lower": ext.lower, "upper": ext.upper}
+    return any(f.at_bound.get(n) and bound[f.at_bound[n]] == 0.0
                for n in ext.parameter_names) or \
         (ext.cause == "macro-slip" and f.at_bound.get("ln_phimax") == "upper")
 
@@ -180,8 +180,8 @@ def _select(data, mask, fe, causes, say) -> dict:
     base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
                                  describe=Headline(fe, ~mask))
     say("base")
-    bfit, bstart = fit_base(base_problem, starts)
-    base = FitCandidate((), base_problem, bfit, bstart)
+    bfit, base_starts = fit_base(base_problem, starts)
+    base = FitCandidate((), base_problem, bfit, base_starts)
     base_pred = fe.predict(bfit.values)
     top = int(np.flatnonzero(mask).max())
     skip = untestable(data)
