@@ -1,20 +1,25 @@
-"""The FE-level diagnosis on synthetic series hiding a randomly drawn FE-level effect.
+"""The FE-level diagnosis on virtual tests made independently of it.
 
-Each draw (:func:`cases.double_beam.fe_synthetic.draw_case`, seeds ``SEED .. SEED+N-1``)
-simulates the FE double beam with a random Iwan glue and one hidden effect of four kinds
-(air drag, cubic hardening, thermal drift in shuffled run order, macro-slip) of random
-size, its FRFs at 10 levels, identifies them by LSCF and adds noise; the diagnosis
-(:func:`cases.double_beam.fe_diagnosis.fe_diagnosis`, every level fitted) sees only the
-measured-data table. A draw passes when the named FE cause is the hidden one and the
-effect's physical parameter (C_D, k3, drift per run, phi_max) is recovered within
-:data:`TOLERANCE`. Target: at least 9 of 10 draws.
+Each draw (:func:`cases.double_beam.fe_synthetic.draw_case`, seeds ``SEED ..``, the
+families taken in turn) simulates the double beam with another glue discretization
+(3, 4, 7 or 9 Jenkins-bank joints, not 5) and another K_T (10^7.4 .. 10^8.6 N/m, not the
+assumed 1e8) by multi-harmonic balance over a stepped sine, identifies every level by
+LSCF and adds repeatability noise (half the series with the identification's std
+columns, half without); the hidden mechanism is realized in forms the diagnosis does
+not fit (the generator's docstring tabulates both), with ``none`` and out-of-catalogue
+draws. The generator imports nothing from ``inverse/``. The diagnosis
+(:func:`cases.double_beam.fe_diagnosis.fe_diagnosis`, every level fitted, the held-out
+gain leave-one-level-out) sees only the measured-data table.
 
-The draws are tasks of :func:`runs.executor.run_sweep` (``--workers``, ``--executor``).
+Scored per family: the answer (``none``, the cause, or ``unexplained`` for
+out-of-catalogue). Checks printed: no false alarm on ``none`` draws; a cause is named
+only with a held-out gain > 1; no internal failure would leave as exit 2 (a plain
+``ValueError`` escaping the FE level); failures (simulations, folds, fits) counted.
 
 Usage::
 
-    python benchmarks/bench_fe_hidden_effect.py                       # 10 draws, serial
-    python benchmarks/bench_fe_hidden_effect.py --executor processes --workers 2
+    python benchmarks/bench_fe_hidden_effect.py                          # 12 draws, serial
+    python benchmarks/bench_fe_hidden_effect.py --draws 24 --executor processes --workers 2
 """
 from __future__ import annotations
 
@@ -26,52 +31,85 @@ for _var in ("NUMBA_NUM_THREADS", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
 
 import argparse  # noqa: E402
 import time  # noqa: E402
+from collections import defaultdict  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-TOLERANCE = 0.15   # relative error of the recovered effect parameter
-SEED = 101
+SEED = 2101
 
 
-def run_draw(seed: int) -> dict:
+def run_draw(task) -> dict:
     from cases.double_beam.fe_diagnosis import fe_diagnosis
     from cases.double_beam.fe_synthetic import draw_case
+    from ident.errors import InputError
+    from inverse.update import InternalError
 
+    seed, family = task
     t0 = time.perf_counter()
-    case = draw_case(seed)
-    r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool))["fe"]
-    truth = case.truth["recovered"]
-    got = r["reading"].get(case.truth["key"], float("nan"))
-    err = got / truth - 1.0 if truth else float("nan")
-    return {"seed": seed, "truth": case.cause, "named": r["cause"], "also": r["also"],
-            "key": case.truth["key"], "true": truth, "fitted": got, "rel_error": err,
-            "gain": r["gain"], "passed": bool(r["cause"] == case.cause and abs(err) <= TOLERANCE),
-            "seconds": time.perf_counter() - t0}
+    case = draw_case(seed, family)
+    row = {"seed": seed, "family": family, "answer": case.answer, "named": None, "also": [],
+           "gain": None, "p": None, "exit": 0, "failures": {}, "error": "",
+           "std_columns": case.truth["std_columns"]}
+    try:
+        r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool))["fe"]
+        row.update(named=r["cause"], also=r["also"], gain=r["gain"],
+                   p=r["fit_test"]["p_value"], failures=r["failures"])
+    except InputError as exc:
+        row.update(exit=2, error=f"input: {exc}")
+    except InternalError as exc:
+        row.update(exit=1, error=str(exc))
+    except ValueError as exc:             # would leave the CLI as exit 2: a defect
+        row.update(exit=2, error=f"leak: {exc}")
+    row["passed"] = row["named"] == case.answer and not row["also"]
+    row["seconds"] = time.perf_counter() - t0
+    return row
 
 
 def main() -> None:
+    from cases.double_beam.fe_synthetic import FAMILIES
     from cli.executor_options import add_executor_arguments, executor_from_args
     from runs.executor import run_sweep
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=SEED)
-    ap.add_argument("--draws", type=int, default=10)
+    ap.add_argument("--draws", type=int, default=12)
     add_executor_arguments(ap)
     args = ap.parse_args()
     spec = executor_from_args(args)
     t0 = time.perf_counter()
-    rows = run_sweep(run_draw, list(range(args.seed, args.seed + args.draws)), executor=spec,
-                     desc="draws", unit="draw")
-    print(f"{'seed':>5s}  {'hidden':22s} {'named':22s} {'also':14s} {'parameter':14s} "
-          f"{'true':>11s} {'fitted':>11s} {'error':>8s}  gain   pass")
+    tasks = [(args.seed + i, FAMILIES[i % len(FAMILIES)]) for i in range(args.draws)]
+    rows = run_sweep(run_draw, tasks, executor=spec, desc="draws", unit="draw")
+    print(f"{'seed':>5s}  {'family':20s} {'expected':20s} {'named':20s} {'also':14s} "
+          f"{'gain':>6s} {'p':>8s} std  exit  pass")
     for r in rows:
-        print(f"{r['seed']:5d}  {r['truth']:22s} {r['named']:22s} {','.join(r['also']) or '-':14s} "
-              f"{r['key']:14s} {r['true']:11.4g} {r['fitted']:11.4g} {100 * r['rel_error']:+7.2f}% "
-              f"{r['gain']:6.2f}  {'yes' if r['passed'] else 'NO'}")
-    n = sum(r["passed"] for r in rows)
-    print(f"passed {n} of {len(rows)} (target >= {int(np.ceil(0.9 * len(rows)))}): "
-          f"{'met' if n >= 0.9 * len(rows) else 'NOT met'}; {time.perf_counter() - t0:.0f} s wall "
-          f"({spec.describe()}), {np.median([r['seconds'] for r in rows]):.1f} s median per draw")
+        g = "n/a" if r["gain"] is None else f"{r['gain']:.2f}"
+        p = "n/a" if r["p"] is None else f"{r['p']:.2g}"
+        print(f"{r['seed']:5d}  {r['family']:20s} {r['answer']:20s} {str(r['named']):20s} "
+              f"{','.join(r['also']) or '-':14s} {g:>6s} {p:>8s} {'yes' if r['std_columns'] else 'no ':3s}"
+              f"  {r['exit']:4d}  {'yes' if r['passed'] else 'NO'}"
+              + (f"  ({r['error']})" if r["error"] else ""))
+    by = defaultdict(list)
+    for r in rows:
+        by[r["family"]].append(r["passed"])
+    print("per family: " + ", ".join(f"{f} {sum(v)}/{len(v)}" for f, v in by.items()))
+    none = [r for r in rows if r["family"] == "none"]
+    false_alarms = [r for r in none if r["named"] not in ("none", None)]
+    named = [r for r in rows if r["named"] not in ("none", "unexplained", None)]
+    bad_gain = [r for r in named if r["gain"] is None or r["gain"] <= 1.0]
+    leaks = [r for r in rows if r["exit"] == 2]
+    internal = [r for r in rows if r["exit"] == 1]
+    fails = {k: sum(r["failures"].get(k, 0) for r in rows)
+             for k in ("simulations", "folds", "fits", "profile_points")}
+    print(f"false alarms on none: {len(false_alarms)} of {len(none)} "
+          f"({'met' if not false_alarms else 'NOT met'})")
+    print(f"causes named with held-out gain <= 1 or n/a: {len(bad_gain)} of {len(named)} "
+          f"({'met' if not bad_gain else 'NOT met'})")
+    print(f"exit 2 from an internal failure: {len(leaks)} ({'met' if not leaks else 'NOT met'}); "
+          f"internal failures reported as such (exit 1): {len(internal)}")
+    print("failures counted: " + ", ".join(f"{k} {v}" for k, v in fails.items()))
+    print(f"passed {sum(r['passed'] for r in rows)} of {len(rows)}; "
+          f"{time.perf_counter() - t0:.0f} s wall ({spec.describe()}), "
+          f"{np.median([r['seconds'] for r in rows]):.1f} s median per draw")
 
 
 if __name__ == "__main__":

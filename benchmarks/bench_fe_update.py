@@ -20,15 +20,19 @@ campaign, and the cost of model updating, measured side by side in one run.
    levels is the bank's discretization plus the truncation to one harmonic, the top level
    (macro-slip) shows the truncation.
 
-2. **Model updating** (:func:`cases.double_beam.update_study.run_update`, fit levels 1-7:
-   chi, |kappa1|B~, zeta_v, f0 and phi_max fitted, profiles of those and of K_T): wall
-   time on a local process pool of 2 workers and on one process. Target <= 60 s wall on
-   2 cores.
+2. **Model updating** (:func:`cases.double_beam.update_study.run_update`, fit levels 1-7,
+   the defaults of ``iwanfe update --case double-beam``: the base model and every
+   testable cause fitted and judged, the selected model's parameters on a bound
+   profiled): wall time and CPU time (parent + workers) on a local process pool of 2
+   workers and on one process. Target (issue 20) <= 10 s on 2 cores. On a shared
+   machine the wall time measures the load; the CPU time of the serial run is the
+   work, and it bounds the 2-core wall time from above.
 
 Usage::
 
     python benchmarks/bench_fe_update.py            # about 1-2 minutes
     python benchmarks/bench_fe_update.py --no-update
+    python benchmarks/bench_fe_update.py --no-campaign
 """
 from __future__ import annotations
 
@@ -47,7 +51,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 TARGET_CAMPAIGN_S = 0.3
-TARGET_UPDATE_S = 60.0
+TARGET_UPDATE_S = 10.0
 
 
 def _median_cpu(func, repeat):
@@ -108,8 +112,8 @@ def update_benchmark() -> None:
     from cases.double_beam.update_study import UPDATED_PARAMETERS, run_update
     from runs.executor import ExecutorSpec
 
-    print("2. model updating, fit levels 1-7 (fit, phi_max scan, profiles incl. K_T)")
-    for spec in (ExecutorSpec("processes", 2), "serial"):
+    print("2. model updating, fit levels 1-7 (model choice by the judge, bound profiles)")
+    for spec in ("serial", ExecutorSpec("processes", 2)):
         ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         c0, w0 = time.process_time(), time.perf_counter()
         r = run_update(executor=spec)
@@ -121,19 +125,22 @@ def update_benchmark() -> None:
         stages = ", ".join(f"{k} {v:.1f} s" for k, v in r["timing_s"].items())
         print(f"   {name:24s}: {wall:6.1f} s wall (CPU: parent {cpu:5.1f} s, workers "
               f"{child:5.1f} s; {stages}), "
-              f"{len(fitted)} parameters fitted ({', '.join(fitted)}) + K_T profiled, "
-              f"chi2 {r['fit'].chi2:.2f}; target {TARGET_UPDATE_S:.0f} s: "
-              f"{TARGET_UPDATE_S / wall:.2f}x ({'met' if wall <= TARGET_UPDATE_S else 'NOT met'})")
+              f"{len(fitted)} parameters fitted ({', '.join(fitted)}), "
+              f"model {r['candidate']}, chi2 {r['fit'].chi2:.2f}; target "
+              f"{TARGET_UPDATE_S:.0f} s: wall {'met' if wall <= TARGET_UPDATE_S else 'NOT met'}, "
+              f"CPU {cpu + child:.1f} s ({'met' if cpu + child <= TARGET_UPDATE_S else 'NOT met'})")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=9)
     ap.add_argument("--no-update", action="store_true")
+    ap.add_argument("--no-campaign", action="store_true")
     args = ap.parse_args()
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.2f}")
-    campaign_benchmark(args.repeat)
+    if not args.no_campaign:
+        campaign_benchmark(args.repeat)
     if not args.no_update:
         update_benchmark()
 

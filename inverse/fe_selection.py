@@ -1,94 +1,172 @@
-"""Choosing among fitted simulator extensions: AICc, cross-validation, held-out levels.
+"""Judging fitted simulator extensions by the one judge (:mod:`inverse.judge`).
 
 Works on :class:`inverse.update.UpdateProblem` / :class:`inverse.update.Fit` pairs (any
 simulator, e.g. the FE double beam and its cause extensions,
-:mod:`cases.double_beam.fe_diagnosis`). Errors are root-mean-square residuals in noise
+:mod:`cases.double_beam.fe_select`). Errors are root-mean-square residuals in noise
 units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
 
 * :func:`cross_validate`: leave-one-level-out over the interior fit levels (the lowest
-  and highest fit level always stay in: they anchor the amplitude range), each left-out
-  level predicted by a refit that did not see it;
+  and highest fit level always stay in: they anchor the amplitude range). Each fold
+  repeats the candidate's whole fit: from every one of its *original* starts, the best
+  kept (never from the full optimum, which has seen the left-out level); a fold whose fit or
+  prediction fails is counted, and an error over failed folds is ``None`` (``n/a``);
 * :func:`held_out_errors`: the levels outside the fit, predicted by the fit itself.
 
-:func:`select_extension` names the extension with the largest AICc drop against the
-base if the drop exceeds ``threshold`` (6) and its cross-validated error is below the
-base's (gain > 1), else ``none``. :func:`prediction_sd` gives linearized prediction
-standard deviations (delta method).
+:func:`judge_extensions` applies :func:`inverse.judge.select` (fit test, cost per
+cause, held-out gain > 1) to the base model and the extensions. The held-out gain
+``base_error / extended_error`` is computed lazily, heaviest Akaike weight first, only
+where it can change the answer. :func:`prediction_sd` gives linearized prediction
+standard deviations (delta method) with parameters at a bound held there.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from inverse.judge import W_AMBIGUOUS, Candidate, fit_test, select
 from inverse.update import Fit, UpdateProblem, fit
 
-__all__ = ["held_out_errors", "cross_validate", "select_extension", "prediction_sd"]
+__all__ = ["FitCandidate", "held_out_errors", "cross_validate", "judge_extensions",
+           "prediction_sd", "fit_test_of"]
 
 
-def held_out_errors(problem: UpdateProblem, values: dict) -> float:
-    """rms residual (noise units) at the levels outside ``problem.fit_mask``."""
+@dataclass
+class FitCandidate:
+    """A fitted explanation: ``causes`` (() for the base model), its ``problem``, its
+    ``fit`` (None: every start failed), the original ``starts`` its fit began from, and
+    ``excluded`` (why it may not be named, or None)."""
+
+    causes: tuple
+    problem: UpdateProblem
+    fit: Fit | None
+    starts: list = field(default_factory=list)
+    excluded: str | None = None
+    cv_error: float | None = None
+    cv_failed: int = 0
+    cv_done: bool = False
+
+    @property
+    def name(self) -> str:
+        return "+".join(self.causes) if self.causes else "none"
+
+
+def held_out_errors(problem: UpdateProblem, values: dict) -> float | None:
+    """rms residual (noise units) at the levels outside ``problem.fit_mask``; nan when
+    there are none, None when the simulation fails."""
     held = ~np.asarray(problem.fit_mask, dtype=bool)
     if not held.any():
         return math.nan
+    before = problem.failures
     r = problem.residuals(values, held)
+    if problem.failures > before:
+        return None
     return float(np.sqrt(np.mean(r * r)))
 
 
-def cross_validate(problem: UpdateProblem, result: Fit) -> float:
-    """Leave-one-level-out rms error over the interior fit levels (module docstring)."""
+def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-8) -> tuple:
+    """Leave-one-level-out rms error over the interior fit levels (module docstring),
+    each fold refitted from every start of ``starts`` (optimizer tolerance ``tol``), the
+    best kept. Returns ``(error or None, failed folds)``."""
     idx = np.flatnonzero(problem.fit_mask)
-    r2 = []
+    r2, failed = [], 0
     for i in idx[1:-1]:
         m = problem.fit_mask.copy()
         m[i] = False
-        f = fit(problem, result.free, start=result.values, mask=m)
+        f = min((fit(problem, result.free, start=s, mask=m, tol=tol) for s in starts or [{}]),
+                key=lambda f: (not f.success, f.chi2))
         one = np.zeros_like(m)
         one[i] = True
+        before = problem.failures
         r = problem.residuals(f.values, one)
+        if not f.success or problem.failures > before:
+            failed += 1
+            continue
         r2.extend((r * r).tolist())
-    return float(np.sqrt(np.mean(r2))) if r2 else math.nan
+    if failed or not r2:
+        return None, failed
+    return float(np.sqrt(np.mean(r2))), failed
 
 
-def select_extension(base_problem: UpdateProblem, base: Fit, candidates: dict,
-                     threshold: float = 6.0, progress=None) -> dict:
-    """Name the best extension (module docstring).
+def _cv(c: FitCandidate, say) -> None:
+    if not c.cv_done and c.fit is not None:
+        say(f"cross-validation: {c.name}")
+        c.cv_error, c.cv_failed = cross_validate(c.problem, c.fit, c.starts)
+        c.cv_done = True
 
-    ``candidates``: ``cause -> (problem, fit)``. Returns ``cause``, ``candidates`` (those
-    past the AICc threshold, best first), ``evidence`` (per cause: ``delta_aicc``,
-    ``chi2``, ``extra_parameters`` and, when cross-validated, ``cv_error``, ``cv_gain``),
-    ``base_cv_error``, ``cv_error`` and ``gain`` of the named cause (the base's own for
-    ``none``).
-    """
+
+def _candidates(cands, base_cv) -> list:
+    out = []
+    for c in cands:
+        if c.fit is None:
+            out.append(Candidate(c.causes, 0, math.inf, 0, None, 1,
+                                 c.excluded or "every start of its fit failed"))
+            continue
+        gain = None
+        if c.causes and c.cv_done and c.cv_error is not None and base_cv is not None:
+            gain = base_cv / c.cv_error if c.cv_error > 0 else math.inf
+        out.append(Candidate(c.causes, c.fit.k, c.fit.chi2, c.fit.n, gain, c.cv_failed,
+                             c.excluded))
+    return out
+
+
+def _reason(c: FitCandidate, sel) -> str | None:
+    why = sel.why_not.get(c.name)
+    if why and c.causes and not c.cv_done and why.startswith("no held-out gain"):
+        return ("held-out gain not computed: its weight is below a third of the named "
+                "one's, so it could not be named")
+    return why
+
+
+def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None) -> dict:
+    """The one rule (:func:`inverse.judge.select`) over ``base`` and ``extensions``
+    (:class:`FitCandidate`); ``noise`` an :class:`inverse.judge.NoiseModel`.
+
+    Returns ``selection`` (the judge's answer), ``candidates`` (name -> FitCandidate)
+    and ``evidence`` (per candidate: ``chi2``, ``n_params``, ``weight``, ``fit_test``,
+    ``cv_error``, ``gain``, ``failed_folds``, ``why_not``)."""
     say = progress or (lambda s: None)
-    evidence = {c: {"delta_aicc": base.aicc - f.aicc, "chi2": f.chi2,
-                    "extra_parameters": f.k - base.k}
-                for c, (p, f) in candidates.items()}
-    passing = sorted((c for c in candidates if evidence[c]["delta_aicc"] > threshold),
-                     key=lambda c: -evidence[c]["delta_aicc"])
-    say("cross-validation: base")
-    base_cv = cross_validate(base_problem, base)
-    cause = "none"
-    for c in passing:
-        say(f"cross-validation: {c}")
-        p, f = candidates[c]
-        e = cross_validate(p, f)
-        evidence[c]["cv_error"] = e
-        evidence[c]["cv_gain"] = base_cv / e if e > 0 else math.inf
-    for c in passing:                                   # largest AICc drop that also
-        if evidence[c]["cv_gain"] > 1.0:                # predicts left-out levels better
-            cause = c
+    cands = [base] + list(extensions)
+    _cv(base, say)
+    base_cv = base.cv_error
+    # weights and fit tests do not need the gain: compute the gain lazily, heaviest
+    # first, until the named candidate and its possible rivals are settled
+    while True:
+        sel = select(_candidates(cands, base_cv), noise)
+        pending = [c for c in cands if c.causes and not c.cv_done and c.fit is not None
+                   and not c.excluded and sel.tests[c.name].passes()]
+        if not pending:
             break
-    cv = evidence[cause]["cv_error"] if cause != "none" else base_cv
-    return {"cause": cause, "candidates": passing, "evidence": evidence,
-            "base_cv_error": base_cv, "cv_error": cv,
-            "gain": base_cv / cv if cv > 0 else math.inf}
+        top = max((sel.weights[k] for k in sel.eligible), default=0.0)
+        need = [c for c in pending if sel.weights[c.name] >= W_AMBIGUOUS * top]
+        if not need:
+            break
+        _cv(max(need, key=lambda c: sel.weights[c.name]), say)
+    ev = {}
+    for c in cands:
+        gain = None
+        if c.causes and c.cv_error is not None and base_cv is not None:
+            gain = base_cv / c.cv_error if c.cv_error > 0 else math.inf
+        t = sel.tests[c.name]
+        ev[c.name] = {"causes": list(c.causes),
+                      "chi2": None if c.fit is None else c.fit.chi2,
+                      "n_params": None if c.fit is None else c.fit.k,
+                      "weight": sel.weights[c.name], "fit_test": t.to_json(),
+                      "cv_error": c.cv_error, "gain": gain,
+                      "gain_computed": c.cv_done, "failed_folds": c.cv_failed,
+                      "failed_simulations": 0 if c.fit is None else c.fit.failed_simulations,
+                      "why_not": _reason(c, sel)}
+    return {"selection": sel, "candidates": {c.name: c for c in cands}, "evidence": ev,
+            "base_cv_error": base_cv}
 
 
 def prediction_sd(problem: UpdateProblem, result: Fit, mask, rel_step: float = 1e-3) -> dict:
     """Standard deviations of the predicted frequency (Hz) and zeta at the levels
-    ``mask``: ``J C J^T`` with ``C`` the fit's covariance times its misfit scale and
-    ``J`` by forward differences (``rel_step`` of each parameter's ``step``)."""
+    ``mask``: ``J C J^T`` with ``C`` the fit's covariance (parameters at a bound held
+    there: zero rows, :func:`inverse.update.fit`) times its misfit scale and ``J`` by
+    forward differences (``rel_step`` of each parameter's ``step``, taken into the
+    parameter's range)."""
     m = np.asarray(mask, dtype=bool)
     n = int(m.sum())
     if result.cov is None or not result.free or n == 0:
@@ -99,12 +177,22 @@ def prediction_sd(problem: UpdateProblem, result: Fit, mask, rel_step: float = 1
         return np.concatenate([np.sqrt(om2[m]) / (2 * math.pi), ze[m]])
 
     y0 = out(result.values)
-    J = np.empty((y0.size, result.k))
+    J = np.zeros((y0.size, result.k))
     for j, name in enumerate(result.free):
-        h = rel_step * problem.parameters[name].step
+        if result.at_bound.get(name):
+            continue                                    # held at the bound
+        p = problem.parameters[name]
+        h = rel_step * p.step
+        if result.values[name] + h > p.upper:
+            h = -h
         v = dict(result.values)
         v[name] = v[name] + h
         J[:, j] = (out(v) - y0) / h
     var = np.einsum("ij,jk,ik->i", J, result.cov * result.misfit_scale, J)
     sd = np.sqrt(np.maximum(var, 0.0))
     return {"frequency_hz": sd[:n].tolist(), "zeta": sd[n:].tolist()}
+
+
+def fit_test_of(result: Fit, noise):
+    """The judge's fit test of one fit."""
+    return fit_test(result.chi2, result.n, result.k, noise)

@@ -11,7 +11,9 @@ intervals are then conditional on a model known to be wrong, and say so).
 A parameter is *determined* when its interval closes on both sides inside the grid,
 *bounded below/above* when only one side closes, *not determined* when the profile stays
 under the threshold over the whole grid (e.g. the glue stiffness of a joint that never
-leaves micro-slip). The grid branches (one per parameter and direction) are independent
+leaves micro-slip), *failed* when a fit of the profile failed before its side closed
+(counted in ``failed_points``; never read as "open"). At a bound of the parameter
+(:func:`bounded_interval`) that side of the interval is the bound itself. The grid branches (one per parameter and direction) are independent
 tasks of :func:`runs.executor.run_sweep`; with a ``store`` (directory, digest of the
 problem) every finished branch is written there as it finishes (``branch_<hash>.json``,
 atomically) and a rerun of the same problem loads it instead of recomputing.
@@ -34,7 +36,7 @@ from runs.jsonio import to_jsonable
 from runs.store import open_manifest
 
 __all__ = ["ProfilePoint", "Profile", "threshold", "profile_branch", "stored_branch",
-           "run_profiles", "linear_grid"]
+           "run_profiles", "linear_grid", "bounded_interval"]
 
 
 @dataclass
@@ -77,8 +79,8 @@ class Profile:
         pts.sort(key=lambda p: abs(p.value - self.best))
         prev_v, prev_d = self.best, 0.0
         for p in pts:
-            if p.values is None:          # a failed fit closes nothing
-                return None
+            if p.values is None:          # a failed fit closes nothing: "failed"
+                return "failed"
             d = p.chi2 - self.chi2_min
             if d > self.threshold:
                 t = (self.threshold - prev_d) / (d - prev_d) if d != prev_d else 1.0
@@ -88,11 +90,23 @@ class Profile:
 
     @property
     def interval(self) -> tuple:
-        """(lower, upper); None where the profile never leaves the threshold."""
-        return self._cross(-1), self._cross(+1)
+        """(lower, upper); None where the profile never leaves the threshold or a fit
+        failed before it did (:attr:`failed_sides`)."""
+        return tuple(None if e == "failed" else e for e in (self._cross(-1), self._cross(+1)))
+
+    @property
+    def failed_sides(self) -> list:
+        """The sides (``lower``, ``upper``) a failed fit left open."""
+        return [w for w, s in (("lower", -1), ("upper", +1)) if self._cross(s) == "failed"]
+
+    @property
+    def failed_points(self) -> int:
+        return sum(p.values is None for p in self.points)
 
     @property
     def status(self) -> str:
+        if self.failed_sides:
+            return "failed (" + ", ".join(self.failed_sides) + " side)"
         lo, hi = self.interval
         if lo is not None and hi is not None:
             return "determined"
@@ -110,9 +124,20 @@ class Profile:
     def to_dict(self) -> dict:
         lo, hi = self.interval
         return {"best": self.best, "interval": [lo, hi], "status": self.status,
-                "threshold": self.threshold,
+                "threshold": self.threshold, "failed_points": self.failed_points,
                 "grid": [{"value": p.value, "delta_chi2": p.chi2 - self.chi2_min}
                          for p in self.points]}
+
+
+def bounded_interval(profile: Profile, lower: float, upper: float, side) -> tuple:
+    """The profile interval of a parameter whose optimum sits on its ``side`` bound
+    (``"lower"``/``"upper"``, else the plain interval): that end is the bound."""
+    lo, hi = profile.interval
+    if side == "lower":
+        lo = lower
+    elif side == "upper":
+        hi = upper
+    return lo, hi
 
 
 def threshold(best: Fit, confidence: float = 0.95) -> float:
@@ -129,7 +154,9 @@ def linear_grid(best: Fit, name: str, param, n: int = 6, width: float = 3.0):
     offs = width * se * np.arange(1, n + 1) / n
     down = [max(x - o, param.lower) for o in offs]
     up = [min(x + o, param.upper) for o in offs]
-    dedup = lambda v: [a for i, a in enumerate(v) if a != x and a not in v[:i]]  # noqa: E731
+    tiny = 1e-6 * param.step          # a branch starting on a bound has no points
+    dedup = lambda v: [a for i, a in enumerate(v)  # noqa: E731
+                       if abs(a - x) > tiny and a not in v[:i]]
     return dedup(down), dedup(up)
 
 

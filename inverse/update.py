@@ -12,16 +12,24 @@ squares, i.e. Gaussian maximum likelihood with known noise levels
 
 minimized by :func:`scipy.optimize.least_squares` (trust-region reflective, bounds,
 finite-difference Jacobian in the parameters scaled by their ``step``). A simulator
-that fails (no steady state) returns a large residual, so the optimizer steps back.
+that fails (no steady state) returns a large residual, so the optimizer steps back;
+every such failure is counted (``UpdateProblem.failures``, ``Fit.failed_simulations``)
+and a fit whose optimum still holds one is not a success.
+
+Bounds. A free parameter within ``1e-4 step`` of a bound at the optimum is *at its
+bound* (``Fit.at_bound``); the covariance ``(J^T J)^-1`` is then taken over the other
+free parameters only, with the bound one held (zero variance): a linearized interval
+is wrong at a bound (the likelihood is cut there), its interval is a profile
+(:mod:`inverse.profile`), and prediction intervals hold it at the bound.
+Bounds that do not enclose a non-empty interval, or an optimizer error, raise
+:class:`InternalError` (a failure of the program, not of the input).
 AICc (known noise): ``chi2 + 2k + 2k(k+1)/(n-k-1)`` with ``n`` the number of residuals,
 ``k`` the number of fitted parameters.
 
-Noise (:func:`noise_model`): the data's own ``omega2_std`` / ``zeta_std`` columns when
-present (the identification's uncertainty, shared/spec/diagnosis.md); otherwise the
-scatter of the fit levels about a *free* power law per channel, ``y = a + b (e/e_1)^p``
-(three parameters per channel, frequency and damping untied): the most flexible
-monotone amplitude law, independent of the models being compared, so a misfit of the
-physics cannot hide in the noise level (the spec's warning); ``s^2 = RSS/(n - 3)``.
+Noise: the :class:`NoiseModel` given to the problem, in the FE loop the totals of the one
+judge's noise model (:func:`inverse.judge.noise_model`, via
+:func:`cases.double_beam.fe_select.fe_noise`): the identification's stds plus the test's
+repeatability, the same noise as the one-mode diagnosis.
 """
 from __future__ import annotations
 
@@ -32,10 +40,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-__all__ = ["Parameter", "NoiseModel", "power_law_noise", "noise_model", "UpdateProblem",
-           "Fit", "fit"]
+__all__ = ["InternalError", "Parameter", "NoiseModel", "UpdateProblem", "Fit", "fit"]
 
-_FAILED = 1e4   # residual of a failed simulation, in noise units
+_FAILED = 1e4   # residual of a failed simulation, in noise units (counted, never reported)
+#: A free parameter this close to a bound (in units of its step) is at the bound.
+AT_BOUND_STEPS = 1e-4
+
+
+class InternalError(RuntimeError):
+    """A failure of the program (inconsistent bounds, an optimizer error), not of the
+    input: the CLI reports it as an internal failure (exit status 1)."""
 
 
 @dataclass(frozen=True)
@@ -67,45 +81,6 @@ class NoiseModel:
                 "source": self.source, "dof": self.dof}
 
 
-def _free_power_law_rss(x, y):
-    """RSS of ``y = a + b x^p`` (``x = e/e_1 >= 1``) over ``p`` in (0, 3]; linear in
-    ``a, b`` for each ``p`` (variable projection on a fine grid of ``p``)."""
-    best = math.inf
-    for p in np.linspace(0.02, 3.0, 299):
-        A = np.column_stack([np.ones_like(x), x ** p])
-        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-        best = min(best, float(np.sum((A @ coef - y) ** 2)))
-    return best
-
-
-def power_law_noise(excitation, omega2, zeta, mask) -> NoiseModel:
-    """Noise of the levels ``mask`` from their scatter about a free power law per
-    channel (module docstring); needs at least 5 levels."""
-    m = np.asarray(mask, dtype=bool)
-    n = int(m.sum())
-    if n < 5:
-        raise ValueError(f"the noise level needs at least 5 fit levels, got {n}")
-    e = np.asarray(excitation, dtype=float)
-    x = e[m] / e[m].min()
-    L = e.size
-    s_w = math.sqrt(_free_power_law_rss(x, np.asarray(omega2, float)[m]) / (n - 3))
-    s_z = math.sqrt(_free_power_law_rss(x, np.asarray(zeta, float)[m]) / (n - 3))
-    s_w = max(s_w, 1e-9 * float(np.mean(omega2)))
-    s_z = max(s_z, 1e-9)
-    return NoiseModel(np.full(L, s_w), np.full(L, s_z),
-                      f"scatter of the {n} fit levels about a free power law per channel "
-                      f"(y = a + b (e/e1)^p, 3 parameters each)", dof=n - 3)
-
-
-def noise_model(data, mask) -> NoiseModel:
-    """The data's ``omega2_std``/``zeta_std`` columns if present, else
-    :func:`power_law_noise` of the fit levels ``mask``."""
-    if data.omega2_std is not None and data.zeta_std is not None:
-        return NoiseModel(np.asarray(data.omega2_std, float), np.asarray(data.zeta_std, float),
-                          "the data's omega2_std and zeta_std columns")
-    return power_law_noise(data.excitation, data.omega2, data.zeta, mask)
-
-
 @dataclass
 class UpdateProblem:
     """Observed levels, their noise, which levels are fitted, the parameters, the
@@ -121,16 +96,21 @@ class UpdateProblem:
     parameters: dict
     fixed: dict = field(default_factory=dict)
     describe: object = None
+    failures: int = 0
 
     def residuals(self, values: dict, mask=None) -> np.ndarray:
-        """Eq. (1)'s residual vector on ``mask`` (default the fit levels)."""
+        """Eq. (1)'s residual vector on ``mask`` (default the fit levels); a failed
+        simulation counts in ``failures`` and gives ``_FAILED`` per residual."""
         m = self.fit_mask if mask is None else np.asarray(mask, dtype=bool)
         try:
             om2, ze = self.simulate(values)
         except (RuntimeError, ValueError, ArithmeticError):
+            self.failures += 1
             return np.full(2 * int(m.sum()), _FAILED)
         r = np.concatenate([(om2[m] - self.omega2[m]) / self.noise.sigma_omega2[m],
                             (ze[m] - self.zeta[m]) / self.noise.sigma_zeta[m]])
+        if not np.all(np.isfinite(r)):
+            self.failures += 1
         return np.where(np.isfinite(r), r, _FAILED)
 
 
@@ -149,6 +129,8 @@ class Fit:
     seconds: float
     success: bool
     message: str = ""
+    at_bound: dict = field(default_factory=dict)
+    failed_simulations: int = 0
 
     @property
     def k(self) -> int:
@@ -169,8 +151,9 @@ class Fit:
         return max(1.0, self.chi2 / self.dof) if self.dof > 0 else 1.0
 
     def std_error(self, name: str) -> float:
-        """Linearized standard error of a free parameter, scaled by the misfit."""
-        if self.cov is None or name not in self.free:
+        """Linearized standard error of a free parameter, scaled by the misfit (nan at
+        a bound: its interval is a profile, module docstring)."""
+        if self.cov is None or name not in self.free or self.at_bound.get(name):
             return math.nan
         i = self.free.index(name)
         return math.sqrt(max(self.cov[i, i], 0.0) * self.misfit_scale)
@@ -180,7 +163,32 @@ class Fit:
                 "n_residuals": self.n, "dof": self.dof, "aicc": self.aicc,
                 "misfit_scale": self.misfit_scale, "evaluations": self.nfev,
                 "seconds": self.seconds, "success": self.success,
+                "failed_simulations": self.failed_simulations,
+                "at_bound": {f: self.at_bound.get(f, False) for f in self.free},
                 "std_error": {f: self.std_error(f) for f in self.free}}
+
+
+def _bound_side(x: float, p: Parameter) -> str | bool:
+    """``"lower"``/``"upper"`` when ``x`` is at that bound of ``p``, else False."""
+    tol = AT_BOUND_STEPS * p.step
+    if math.isfinite(p.lower) and x - p.lower <= tol:
+        return "lower"
+    if math.isfinite(p.upper) and p.upper - x <= tol:
+        return "upper"
+    return False
+
+
+def _covariance(J: np.ndarray, held: np.ndarray) -> np.ndarray | None:
+    """``(J^T J)^-1`` over the columns not ``held``; held rows/columns zero."""
+    k = J.shape[1]
+    cov = np.zeros((k, k))
+    keep = np.flatnonzero(~held)
+    if keep.size:
+        try:
+            cov[np.ix_(keep, keep)] = np.linalg.inv(J[:, keep].T @ J[:, keep])
+        except np.linalg.LinAlgError:
+            return None
+    return cov
 
 
 def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | None = None,
@@ -202,6 +210,13 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
         values.update(start)
     if fixed:
         values.update(fixed)
+    for p in pars:
+        if not (math.isfinite(p.step) and p.step > 0):
+            raise InternalError(f"internal failure: parameter {p.name} has step {p.step!r} "
+                                f"(must be a positive number)")
+        if not p.lower < p.upper:
+            raise InternalError(f"internal failure: parameter {p.name} has bounds "
+                                f"[{p.lower:.6g}, {p.upper:.6g}] that enclose nothing")
     x0 = np.array([min(max(values[f], p.lower), p.upper) for f, p in zip(free, pars)])
     step = np.array([p.step for p in pars])
     lo = np.array([(p.lower - x) / s for p, x, s in zip(pars, x0, step)])
@@ -216,19 +231,25 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
     def fun(u):
         return problem.residuals(at(u), mask)
 
+    failed0 = problem.failures
     if not free:
         r = fun(u0)
         return Fit(values=values, free=free, chi2=float(r @ r), n=r.size, cov=None, nfev=1,
-                   seconds=time.perf_counter() - t0, success=True)
-    res = least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-6,
-                        x_scale=1.0, max_nfev=max_nfev, xtol=tol, ftol=tol, gtol=tol)
-    J = res.jac / step[None, :]
+                   seconds=time.perf_counter() - t0, success=bool(np.all(np.abs(r) < _FAILED)),
+                   failed_simulations=problem.failures - failed0)
     try:
-        cov = np.linalg.inv(J.T @ J)
-    except np.linalg.LinAlgError:
-        cov = None
+        res = least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-6,
+                            x_scale=1.0, max_nfev=max_nfev, xtol=tol, ftol=tol, gtol=tol)
+    except ValueError as exc:
+        raise InternalError(f"internal failure: the fit of {', '.join(free)} stopped: "
+                            f"{exc}") from exc
+    best = at(res.x)
+    side = {f: _bound_side(best[f], p) for f, p in zip(free, pars)}
+    J = res.jac / step[None, :]
+    cov = _covariance(J, np.array([bool(side[f]) for f in free]))
     r = res.fun
-    return Fit(values=at(res.x), free=free, chi2=float(r @ r), n=r.size, cov=cov,
+    return Fit(values=best, free=free, chi2=float(r @ r), n=r.size, cov=cov,
                nfev=int(res.nfev), seconds=time.perf_counter() - t0,
                success=bool(res.success) and bool(np.all(np.abs(r) < _FAILED)),
-               message=str(res.message))
+               message=str(res.message), at_bound=side,
+               failed_simulations=problem.failures - failed0)

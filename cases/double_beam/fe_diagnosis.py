@@ -1,24 +1,21 @@
 """The diagnosis at the FE level: base and extended FE double beams refitted to the
-measured levels, their errors on levels they never saw.
+measured levels, judged by the one judge, their errors on levels they never saw.
 
-:func:`fe_diagnosis` fits, on the fit levels (default: all but the top three), the base
-FE model (:mod:`cases.double_beam.fe_levels`: Iwan glue with ``beta = 0``, viscous
-damping, stuck frequency) and each FE realization of a cause
-(:mod:`cases.double_beam.fe_causes`, one extra parameter, several starts), by weighted
-least squares with the noise model of :func:`inverse.update.noise_model`
-(:func:`inverse.fe_selection.select_extension` chooses). The named FE cause
-is the extension with the largest AICc drop, if the drop exceeds 6 and its
-leave-one-level-out error over the interior fit levels is below the base model's (the
-same rule as the one-mode diagnosis); a second cause is named in ``also`` when adding
-it to the first drops AICc by more than 6 again and lowers the cross-validated error. Scores (both channels, in noise
-units, ``err = sqrt(mean r^2)``):
+:func:`fe_diagnosis` runs :func:`cases.double_beam.fe_select.fe_select` on the fit levels
+(default: all but the top three): the base FE model and each testable cause's FE
+realization, judged by :func:`inverse.judge.select` (fit test, so the answer can be
+``unexplained``; cost per cause; held-out gain > 1), then reports the chosen model:
 
-* ``gain``: base / extended leave-one-level-out error over the interior fit levels;
-* ``gain_held_out``: base / extended error at the levels above the fit levels, each
-  model fitted to the fit levels only (the paper's protocol: fit 1-7, predict 8-10).
-
-The held-out errors are also given in Hz and in % of zeta with linearized prediction
-intervals (delta method, the fit's covariance widened by its misfit).
+* ``gain``: base / extended leave-one-level-out error over the interior fit levels
+  (folds refitted from the original starts; ``None`` over failed folds);
+* ``gain_held_out``: base / extended error at the levels above the fit levels (the
+  paper's protocol: fit 1-7, predict 8-10);
+* ``parameters``: every fitted parameter with ``at_bound``; its interval is a profile
+  (:mod:`inverse.profile`) when it sits on a bound, else linearized (covariance);
+* ``held_out``: per held-out level the errors in Hz and in % of zeta and the 95 %
+  prediction interval (the fit's delta-method sd with bound parameters held there,
+  plus the noise of the level), whether the level lies inside it, and if not by how
+  many sd (``misses``, with the reason).
 """
 from __future__ import annotations
 
@@ -26,20 +23,19 @@ import math
 
 import numpy as np
 
-from cases.double_beam.fe_causes import EXTENSIONS, Combined
-from cases.double_beam.fe_levels import (BASE_PARAMETERS, DoubleBeamLevels, Simulator,
-                                         level_entries)
-from cases.double_beam.update_study import Headline, base_fit, base_parameters
-from inverse.fe_selection import (cross_validate, held_out_errors, prediction_sd,
-                                  select_extension)
-from inverse.update import UpdateProblem, fit, noise_model
+from cases.double_beam.fe_levels import level_entries
+from cases.double_beam.fe_select import chosen_model, fe_select
+from inverse.fe_selection import held_out_errors, prediction_sd
+from inverse.profile import bounded_interval, linear_grid, run_profiles
 
-__all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "fe_levels_table"]
+__all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "parameter_table",
+           "held_out_table"]
 
 FIT_RULE = "all levels but the top three (at least 5 fitted)"
 #: The acceptance tolerances of issue 13 on held-out levels.
 TOLERANCE_HZ = 0.02
 TOLERANCE_ZETA_REL = 0.005
+Z95 = 1.959963984540054
 
 
 def default_fit_mask(levels) -> np.ndarray:
@@ -51,33 +47,81 @@ def default_fit_mask(levels) -> np.ndarray:
     return mask
 
 
-def _extension_problem(problem, fe, ext, base_pred, noise, top):
-    spec = ext.spec(fe, base_pred, noise, top)
-    P = dict(problem.parameters)
-    for s in (spec if isinstance(spec, list) else [spec]):
-        P[s.name] = s
-    return UpdateProblem(Simulator(fe, ext), problem.omega2, problem.zeta, noise,
-                         problem.fit_mask, P, describe=Headline(fe, ~problem.fit_mask, ext))
+def parameter_table(problem, f, profiles: dict | None = None) -> dict:
+    """Every fitted parameter of fit ``f``: value, unit, ``at_bound`` (False or the
+    bound's side), interval and its kind (profile at a bound, covariance inside)."""
+    out = {}
+    for name in f.free:
+        p = problem.parameters[name]
+        side = f.at_bound.get(name, False)
+        entry = {"value": f.values[name], "unit": p.unit, "kind": "fitted",
+                 "lower_bound": p.lower, "upper_bound": p.upper, "at_bound": side}
+        if profiles and name in profiles:
+            pr = profiles[name]
+            entry.update(interval=list(bounded_interval(pr, p.lower, p.upper, side)),
+                         interval_kind="profile likelihood 95 %", status=pr.status)
+        else:
+            se = f.std_error(name)
+            entry.update(std_error=se, interval=[f.values[name] - Z95 * se,
+                                                 f.values[name] + Z95 * se]
+                         if math.isfinite(se) else [None, None],
+                         interval_kind="linearized 95 % (misfit-scaled covariance)")
+        out[name] = entry
+    return out
 
 
-def _fit_extension(problem, ext, base):
-    """Multi-start fit of ``ext`` (its starts x two chi starts) from the base fit."""
-    names = ext.parameter_names
-    free = BASE_PARAMETERS + tuple(names)
-    specs = [problem.parameters[n] for n in names]
-    best = None
-    for s0 in ext.start_sets(specs):
-        for chi in sorted({base.values["chi"], -0.5}):
-            f = fit(problem, free, start=dict(base.values, chi=chi, **s0))
-            if f.success and (best is None or f.chi2 < best.chi2):
-                best = f
-    return best
+def bound_profiles(problem, f, points: int = 4) -> dict:
+    """Profiles of the parameters of ``f`` that sit on a bound (inward branch only)."""
+    names = [n for n in f.free if f.at_bound.get(n)]
+    if not names:
+        return {}
+    grids = {n: linear_grid(f, n, problem.parameters[n], points) for n in names}
+    return run_profiles(problem, f, grids, f.free)
 
 
-def fe_levels_table(data, mask, base_pred, ext_pred) -> list:
-    """One entry per level: ``level``, ``held_out``, ``measured``, ``base``, ``extended``
-    (each ``{frequency_hz, zeta}``)."""
-    return level_entries(data, mask, {"base": base_pred, "extended": ext_pred})
+def _miss_reason(row, fit_ok: bool, bound: list) -> str:
+    why = ("the fit levels lie within their noise, so the model form fails only beyond "
+           "them (an extrapolation past the fitted amplitudes)" if fit_ok else
+           "the model already misfits the fit levels")
+    if bound:
+        why += (f"; {', '.join(bound)} held at its bound (the interval does not include "
+                f"what the model would do past it)")
+    return why
+
+
+def held_out_table(data, mask, pred, problem, f, fit_ok: bool) -> tuple:
+    """Per held-out level: errors, prediction sd and 95 % interval (module docstring);
+    and the list of levels outside it, with sd and reason."""
+    held = ~np.asarray(mask, dtype=bool)
+    sd = prediction_sd(problem, f, held)
+    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
+    noise = problem.noise
+    bound = [n for n in f.free if f.at_bound.get(n)]
+    rows, misses = [], []
+    for j, i in enumerate(np.flatnonzero(held)):
+        s_nf = float(noise.sigma_omega2[i]) / (8 * math.pi ** 2 * f_meas[i])
+        s_nz = float(noise.sigma_zeta[i])
+        tot_f = math.hypot(sd["frequency_hz"][j], s_nf)
+        tot_z = math.hypot(sd["zeta"][j], s_nz)
+        e_f = float(pred.frequency_hz[i] - f_meas[i])
+        e_z = float(pred.zeta[i] - data.zeta[i])
+        row = {"level": int(data.level[i]), "error_hz": e_f,
+               "error_zeta_rel": float(pred.zeta[i] / data.zeta[i] - 1.0),
+               "model_sd_hz": sd["frequency_hz"][j], "noise_sd_hz": s_nf,
+               "pi95_half_width_hz": Z95 * tot_f,
+               "model_sd_zeta_rel": sd["zeta"][j] / float(data.zeta[i]),
+               "pi95_half_width_zeta_rel": Z95 * tot_z / float(data.zeta[i]),
+               "z_frequency": e_f / tot_f, "z_zeta": e_z / tot_z}
+        row["inside_pi95"] = bool(abs(row["z_frequency"]) <= Z95 and abs(row["z_zeta"]) <= Z95)
+        rows.append(row)
+        if not row["inside_pi95"]:
+            ch = [f"frequency {row['z_frequency']:+.1f} sd" if abs(row["z_frequency"]) > Z95
+                  else None, f"zeta {row['z_zeta']:+.1f} sd" if abs(row["z_zeta"]) > Z95
+                  else None]
+            misses.append({"level": row["level"], "by": ", ".join(c for c in ch if c),
+                           "z_frequency": row["z_frequency"], "z_zeta": row["z_zeta"],
+                           "why": _miss_reason(row, fit_ok, bound)})
+    return rows, misses
 
 
 def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
@@ -95,88 +139,71 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
 
     Returns
     -------
-    dict with ``fe_levels``, ``fe`` (cause, also, gains, errors, parameters, ...).
+    dict with ``fe_levels``, ``fe`` (cause, also, fit test, gains, errors, parameters).
     """
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+
     mask = default_fit_mask(data.level) if mask is None else np.asarray(mask, dtype=bool)
     if mask.sum() < 5:
         raise ValueError(f"the FE diagnosis needs at least 5 fit levels, got {int(mask.sum())}")
-    noise = noise_model(data, mask)
     fe = DoubleBeamLevels.from_data(data, force_scale=force_scale)
-    P, starts = base_parameters(data, mask, fe)
-    base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
-                                 describe=Headline(fe, ~mask))
-    say = progress or (lambda s: None)
-    say("base")
-    base = base_fit(base_problem, starts)
-    base_pred = fe.predict(base.values)
-    top = int(np.flatnonzero(mask).max())
-    fits = {}
-    for cause in (causes or EXTENSIONS):
-        say(cause)
-        ext = EXTENSIONS[cause]
-        prob = _extension_problem(base_problem, fe, ext, base_pred, noise, top)
-        fits[cause] = (ext, prob, _fit_extension(prob, ext, base))
-    sel = select_extension(base_problem, base, {c: (p, f) for c, (e, p, f) in fits.items()
-                                                if f is not None}, progress=say)
-    cause = sel["cause"]
-    also, cv_ext = [], sel["cv_error"]
-    if cause != "none":
-        ext, prob, f = fits[cause]
-        best_aicc = f.aicc
-        for other in sel["candidates"]:
-            if other == cause:
-                continue
-            say(f"{cause} + {other}")
-            pair = Combined(ext, EXTENSIONS[other])
-            pprob = _extension_problem(base_problem, fe, pair, base_pred, noise, top)
-            pf = _fit_extension(pprob, pair, f)
-            if pf is None or best_aicc - pf.aicc <= 6.0:
-                continue
-            cv = cross_validate(pprob, pf)                  # and it must predict better
-            if cv < cv_ext:
-                also, cv_ext, best_aicc = [other], cv, pf.aicc
-                fits["+".join((cause, other))] = (pair, pprob, pf)
-                sel["evidence"][cause + "+" + other] = {
-                    "delta_aicc": base.aicc - pf.aicc, "chi2": pf.chi2, "cv_error": cv,
-                    "cv_gain": sel["base_cv_error"] / cv, "extra_parameters": pf.k - base.k}
-        ext, prob, f = fits["+".join([cause] + also)]
-    else:
-        ext, prob, f = None, base_problem, base
+    s = fe_select(data, mask, fe, causes, progress)
+    return report(data, mask, s)
+
+
+def report(data, mask, s: dict) -> dict:
+    """``fe_levels`` and ``fe`` of a :func:`fe_select` result (module docstring)."""
+    fe, base = s["fe"], s["base"]
+    sel, judged = s["judged"]["selection"], s["judged"]
+    ext, chosen = chosen_model(s)
+    f, prob = chosen.fit, chosen.problem
+    base_pred = fe.predict(base.fit.values)
     ext_pred = fe.predict(f.values, ext)
-    held = ~mask
-    errs_b = held_out_errors(base_problem, base.values)
+    test = sel.tests[chosen.name]
+    profiles = bound_profiles(prob, f)
+    rows, misses = held_out_table(data, mask, ext_pred, prob, f, test.passes())
+    errs_b = held_out_errors(base.problem, base.fit.values)
     errs_e = held_out_errors(prob, f.values)
-    sd = prediction_sd(prob, f, held)
-    rows = fe_levels_table(data, mask, base_pred, ext_pred)
-    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
-    table = []
-    for i in np.flatnonzero(held):
-        table.append({
-            "level": int(data.level[i]),
-            "base_error_hz": float(base_pred.frequency_hz[i] - f_meas[i]),
-            "extended_error_hz": float(ext_pred.frequency_hz[i] - f_meas[i]),
-            "base_error_zeta_rel": float(base_pred.zeta[i] / data.zeta[i] - 1.0),
-            "extended_error_zeta_rel": float(ext_pred.zeta[i] / data.zeta[i] - 1.0),
-            "extended_sd_hz": sd["frequency_hz"][len(table)],
-            "extended_sd_zeta_rel": sd["zeta"][len(table)] / float(data.zeta[i])})
-    met = bool(table) and all(abs(r["extended_error_hz"]) <= TOLERANCE_HZ and
-                              abs(r["extended_error_zeta_rel"]) <= TOLERANCE_ZETA_REL
-                              for r in table)
+    base_cv = judged["base_cv_error"]
+    ext_cv = chosen.cv_error if chosen.causes else base_cv
+    ratio = lambda a, b: (a / b if b else math.inf) if a is not None and b is not None \
+        else None  # noqa: E731
+    base_err = {r["level"]: float(base_pred.frequency_hz[i] - math.sqrt(data.omega2[i])
+                                  / (2 * math.pi))
+                for i, r in zip(np.flatnonzero(~mask), rows)}
+    for r in rows:                                 # the base model's errors beside them
+        r["base_error_hz"] = base_err[r["level"]]
+        r["extended_error_hz"] = r["error_hz"]
+    met = bool(rows) and all(abs(r["error_hz"]) <= TOLERANCE_HZ and
+                             abs(r["error_zeta_rel"]) <= TOLERANCE_ZETA_REL for r in rows)
     reading = ext.reading(f.values, fe, fe.linear(10 ** f.values["log10_kt"]), ext_pred) \
         if ext is not None else {}
+    failures = {"simulations": sum(c.fit.failed_simulations for c in
+                                   judged["candidates"].values() if c.fit is not None),
+                "folds": sum(c.cv_failed for c in judged["candidates"].values()),
+                "fits": sum(c.fit is None for c in judged["candidates"].values()),
+                "profile_points": sum(p.failed_points for p in profiles.values())}
     summary = {
-        "cause": cause, "also": also, "fit_levels": [int(v) for v in data.level[mask]],
-        "held_out_levels": [int(v) for v in data.level[held]],
-        "noise": noise.to_dict(), "base_fit": base.to_dict(), "extended_fit": f.to_dict(),
-        "evidence": sel["evidence"], "aicc_threshold": 6.0,
-        "base_error": sel["base_cv_error"], "extended_error": cv_ext,
-        "gain": sel["base_cv_error"] / cv_ext if cv_ext > 0 else math.inf,
+        "cause": sel.cause, "also": sel.also, "candidate": chosen.name,
+        "fit_levels": [int(v) for v in data.level[mask]],
+        "held_out_levels": [int(v) for v in data.level[~mask]],
+        "noise": s["judge_noise"].to_json({"omega2": data.omega2, "zeta": data.zeta}),
+        "noise_sigma": s["noise"].to_dict(), "fit_test": test.to_json(),
+        "unexplained": sel.unexplained, "closest_miss": sel.closest_miss,
+        "ambiguous": sel.ambiguous, "rivals": sel.rivals,
+        "untested": s["untested"], "base_fit": base.fit.to_dict(), "extended_fit": f.to_dict(),
+        "parameters": parameter_table(prob, f, profiles),
+        "profiles": {n: p.to_dict() for n, p in profiles.items()},
+        "evidence": judged["evidence"], "rule": "inverse.judge.select",
+        "base_error": base_cv, "extended_error": ext_cv, "gain": ratio(base_cv, ext_cv),
         "base_error_held_out": errs_b, "extended_error_held_out": errs_e,
-        "gain_held_out": (errs_b / errs_e) if errs_e > 0 else math.inf,
-        "held_out": table, "acceptance": {"tolerance_hz": TOLERANCE_HZ,
-                                          "tolerance_zeta_rel": TOLERANCE_ZETA_REL,
-                                          "met": met},
+        "gain_held_out": ratio(errs_b, errs_e),
+        "held_out": rows, "misses": misses,
+        "acceptance": {"tolerance_hz": TOLERANCE_HZ, "tolerance_zeta_rel": TOLERANCE_ZETA_REL,
+                       "met": met},
+        "failures": failures,
         "reading": reading, "joint": {k: v for k, v in ext_pred.joint.items()},
         "error_measure": "rms residual in noise units over both channels (omega2, zeta)",
     }
-    return {"fe_levels": rows, "fe": summary}
+    fe_rows = level_entries(data, mask, {"base": base_pred, "extended": ext_pred})
+    return {"fe_levels": fe_rows, "fe": summary}

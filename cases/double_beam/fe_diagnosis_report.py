@@ -42,57 +42,82 @@ def add_fe_diagnosis(result: dict, data, out=None) -> dict:
     return result
 
 
+def _g(v, spec=".3g"):
+    return "n/a" if v is None else format(v, spec)
+
+
 def format_fe(fe: dict) -> list:
     """Text lines of the FE-level diagnosis."""
+    ft = fe["fit_test"]
     lines = [f"FE level (double beam refitted; fit levels {fe['fit_levels']}, held out "
-             f"{fe['held_out_levels']}):",
-             f"  FE cause: {fe['cause']}" + (f" + {', '.join(fe['also'])}" if fe["also"] else ""),
-             f"  cross-validated: base error {fe['base_error']:.3g}, extended "
-             f"{fe['extended_error']:.3g}, gain {fe['gain']:.3g}",
-             f"  held out: base error {fe['base_error_held_out']:.3g}, extended "
-             f"{fe['extended_error_held_out']:.3g}, gain_held_out {fe['gain_held_out']:.3g} "
+             f"{fe['held_out_levels']}; judged by {fe['rule']}):",
+             f"  FE cause: {fe['cause']}" + (f" + {', '.join(fe['also'])}" if fe["also"] else "")
+             + (f" (closest candidate: {fe['candidate']}, {fe['closest_miss']['why']})"
+                if fe["unexplained"] else ""),
+             f"  fit of {fe['candidate']}: rms {ft['rms_standardized']:.3g} noise sd, p = "
+             f"{_g(ft['p_value'], '.2g')} ({ft['test']})",
+             f"  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),
+             f"  cross-validated: base error {_g(fe['base_error'])}, extended "
+             f"{_g(fe['extended_error'])}, gain {_g(fe['gain'])}",
+             f"  held out: base error {_g(fe['base_error_held_out'])}, extended "
+             f"{_g(fe['extended_error_held_out'])}, gain_held_out {_g(fe['gain_held_out'])} "
              f"({fe['error_measure']})"]
     for c, e in fe["evidence"].items():
-        cv = f", cv gain {e['cv_gain']:.3g}" if "cv_gain" in e else ""
-        lines.append(f"  {c:26s} dAICc {e['delta_aicc']:8.2f}, chi2 {e['chi2']:8.2f}{cv}")
+        chi2 = _g(e["chi2"], "8.2f")
+        lines.append(f"  {c:40s} chi2 {chi2:>8s}, w {e['weight']:.3f}, p "
+                     f"{_g(e['fit_test']['p_value'], '.2g'):>7s}, gain {_g(e['gain'])}"
+                     + (f"  ({e['why_not']})" if e["why_not"] else ""))
+    for c, why in fe["untested"].items():
+        lines.append(f"  not tested: {c} ({why})")
+    fl = fe["failures"]
+    lines.append(f"  failures: {fl['simulations']} simulations, {fl['folds']} folds, "
+                 f"{fl['fits']} fits, {fl['profile_points']} profile points")
+    lines.append("  parameters (fitted; interval 95 %):")
+    for n, p in fe["parameters"].items():
+        iv = p["interval"]
+        ab = f", at its {p['at_bound']} bound" if p["at_bound"] else ""
+        lines.append(f"    {n:10s} {p['value']:.6g} [{_g(iv[0], '.6g')} .. {_g(iv[1], '.6g')}] "
+                     f"({p['interval_kind']}{ab})")
     if fe["reading"]:
         lines.append("  extended FE parameters: " + ", ".join(
             f"{k} = {v:.4g}" for k, v in fe["reading"].items()))
-    lines.append("  level  base err [Hz]  ext err [Hz] (+/- 1 sd)  base err zeta [%]  "
-                 "ext err zeta [%] (+/- 1 sd)")
+    lines.append("  level  base err [Hz]  ext err [Hz] (95 % PI)  ext err zeta [%] (95 % PI)  "
+                 "z f / z zeta")
     for r in fe["held_out"]:
-        lines.append(f"  {r['level']:5d} {r['base_error_hz']:+14.4f} {r['extended_error_hz']:+13.4f} "
-                     f"({r['extended_sd_hz']:.4f}) {100 * r['base_error_zeta_rel']:+17.3f} "
-                     f"{100 * r['extended_error_zeta_rel']:+16.3f} "
-                     f"({100 * r['extended_sd_zeta_rel']:.3f})")
+        lines.append(f"  {r['level']:5d} {r['base_error_hz']:+14.4f} {r['error_hz']:+13.4f} "
+                     f"(+/-{r['pi95_half_width_hz']:.4f}) {100 * r['error_zeta_rel']:+16.3f} "
+                     f"(+/-{100 * r['pi95_half_width_zeta_rel']:.3f}) "
+                     f"{r['z_frequency']:+6.1f} / {r['z_zeta']:+.1f}")
     lines.append("  " + acceptance_text(fe))
     return lines
 
 
 def acceptance_text(fe: dict) -> str:
     """Whether the extended FE model predicts the held-out levels within the issue's
-    tolerances, and if not, whether the fit levels could have told (prediction sd)."""
+    tolerances and inside its own 95 % prediction intervals; which level misses, by how
+    many sd and why."""
     a = fe["acceptance"]
     if not fe["held_out"]:
         return "no held-out levels"
     if a["met"]:
-        return (f"extended FE model within {a['tolerance_hz']} Hz and "
+        text = (f"extended FE model within {a['tolerance_hz']} Hz and "
                 f"{100 * a['tolerance_zeta_rel']:.1f} % at every held-out level")
-    worst = max(fe["held_out"], key=lambda r: abs(r["extended_error_hz"]))
-    reach = [r["level"] for r in fe["held_out"]
-             if 1.96 * r["extended_sd_hz"] > a["tolerance_hz"]
-             or 1.96 * r["extended_sd_zeta_rel"] > a["tolerance_zeta_rel"]]
-    text = (f"not within {a['tolerance_hz']} Hz / {100 * a['tolerance_zeta_rel']:.1f} %: worst "
-            f"level {worst['level']}, {worst['extended_error_hz']:+.4f} Hz")
-    if reach:
-        text += (f"; at level(s) {reach} the 95 % prediction half-width from the fit levels "
-                 f"alone already exceeds the tolerance (the data's noise makes it unreachable "
-                 f"there)")
-    z = ", ".join(f"{r['level']}: {r['extended_error_hz'] / r['extended_sd_hz']:+.1f} / "
-                  f"{r['extended_error_zeta_rel'] / r['extended_sd_zeta_rel']:+.1f}"
-                  for r in fe["held_out"] if r["extended_sd_hz"] > 0)
-    if z:
-        text += f"; errors in prediction sd (frequency / zeta) at level {z}"
+    else:
+        worst = max(fe["held_out"], key=lambda r: abs(r["error_hz"]))
+        text = (f"not within {a['tolerance_hz']} Hz / {100 * a['tolerance_zeta_rel']:.1f} %: "
+                f"worst level {worst['level']}, {worst['error_hz']:+.4f} Hz")
+        wide = [r["level"] for r in fe["held_out"] if r["pi95_half_width_hz"] > a["tolerance_hz"]]
+        if wide:
+            text += (f"; at level(s) {wide} the 95 % prediction half-width already exceeds "
+                     f"{a['tolerance_hz']} Hz")
+        else:
+            text += ("; every 95 % prediction half-width is below the tolerance, so the "
+                     "noise does not make it unreachable: the miss is the model's")
+    if fe["misses"]:
+        text += "; outside the 95 % prediction interval: " + "; ".join(
+            f"level {m['level']} by {m['by']} ({m['why']})" for m in fe["misses"])
+    else:
+        text += "; every held-out level inside its 95 % prediction interval"
     return text
 
 
@@ -105,8 +130,8 @@ def write_fe_files(result: dict, out: Path) -> list:
     lv = np.array([r["level"] for r in rows])
     f = np.array([r["measured"]["frequency_hz"] for r in rows])
     z = np.array([r["measured"]["zeta"] for r in rows])
-    s_om2 = np.asarray(fe["noise"]["sigma_omega2"], dtype=float)
-    s_z = np.asarray(fe["noise"]["sigma_zeta"], dtype=float)
+    s_om2 = np.asarray(fe["noise_sigma"]["sigma_omega2"], dtype=float)
+    s_z = np.asarray(fe["noise_sigma"]["sigma_zeta"], dtype=float)
     models = {"base FE": ([r["base"]["frequency_hz"] for r in rows],
                           [r["base"]["zeta"] for r in rows]),
               f"extended FE ({fe['cause']})": ([r["extended"]["frequency_hz"] for r in rows],

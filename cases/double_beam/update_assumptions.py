@@ -40,23 +40,24 @@ ASSUMPTIONS = {
 
 def _refit(task, shared):
     name, changes = task
-    data, mask, noise, parameters, values, free, force_scale, describe_cls = shared
+    data, mask, noise, parameters, values, free, force_scale, describe_cls, ext = shared
     fe = DoubleBeamLevels.from_data(data, force_scale=force_scale,
                                     config=replace(DoubleBeamConfig(), **changes))
-    prob = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, parameters)
+    prob = UpdateProblem(Simulator(fe, ext), data.omega2, data.zeta, noise, mask, parameters)
     starts = [values]
     if "ln_phimax" in free:     # a sharp macro-slip onset: try it a little earlier/later
         starts += [dict(values, ln_phimax=values["ln_phimax"] + d) for d in (-0.2, -0.1, 0.1, 0.2)]
     f = min((fit(prob, free, start=s) for s in starts), key=lambda f: f.chi2)
     return {"assumption": name, "changes": changes, "chi2": f.chi2, "values": f.values,
-            "headline": describe_cls(fe, ~mask)(f.values)}
+            "headline": describe_cls(fe, ~mask, ext)(f.values)}
 
 
 def assumption_sensitivity(data, mask, noise, parameters, best, force_scale, describe_cls,
-                           executor="serial") -> list:
-    """Refit ``best`` (a :class:`inverse.update.Fit`) under every change of
-    :data:`ASSUMPTIONS`; ``describe_cls(fe, held_out)`` gives the headline figures."""
+                           executor="serial", extension=None) -> list:
+    """Refit ``best`` (a :class:`inverse.update.Fit` of the model with ``extension``)
+    under every change of :data:`ASSUMPTIONS`; ``describe_cls(fe, held_out, extension)``
+    gives the headline figures."""
     shared = (data, mask, noise, parameters, dict(best.values), best.free, force_scale,
-              describe_cls)
+              describe_cls, extension)
     return run_sweep(_refit, list(ASSUMPTIONS.items()), executor=executor, shared=shared,
                      progress=False)

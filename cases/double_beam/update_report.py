@@ -16,7 +16,9 @@ import numpy as np
 
 from cases.double_beam.fe_levels import level_entries
 from cases.double_beam.update_study import BASE_PARAMETERS
+from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
+from inverse.profile import bounded_interval
 from runs.jsonio import to_jsonable
 
 __all__ = ["summary", "format_text", "markdown", "write_update"]
@@ -72,10 +74,20 @@ def summary(r: dict) -> dict:
         pr = r["profiles"].get(name)
         value = best.values[name]
         kind = "fitted" if name in best.free else "assumed"
+        side = best.at_bound.get(name, False)
         entry = {"value": value, "unit": p.unit, "description": p.description, "kind": kind}
+        if kind == "fitted":
+            entry.update(at_bound=side, lower_bound=p.lower, upper_bound=p.upper)
         if pr is not None:
-            lo, hi = pr.interval
-            entry.update(interval=[lo, hi], status=pr.status)
+            lo, hi = bounded_interval(pr, p.lower, p.upper, side)
+            entry.update(interval=[lo, hi], status=pr.status,
+                         interval_kind="profile likelihood")
+        elif kind == "fitted":
+            se = best.std_error(name)
+            ok = math.isfinite(se)
+            entry.update(interval=[value - 1.96 * se, value + 1.96 * se] if ok else [None, None],
+                         status="determined" if ok else "not determined",
+                         interval_kind="linearized (misfit-scaled covariance)")
             if kind == "assumed" and abs(value - p.start) > 1e-9:
                 entry["kind"] = "profile minimum (grid)"
                 entry["assumed_value"] = p.start
@@ -90,21 +102,26 @@ def summary(r: dict) -> dict:
                "force_scale_N_per_unit": r["settings"].force_scale}
     levels = _levels(data, mask, pred, r["noise"])
     held = [row for row in levels if row["held_out"]]
-    statements = [f"chi2 = {best.chi2:.1f} on {best.dof} degrees of freedom "
-                  f"(chi2/dof = {best.chi2 / max(best.dof, 1):.1f}): the base model misfits "
-                  f"the fit levels by {math.sqrt(best.misfit_scale):.1f}x the noise",
-                  _tie_statement(data, mask)["text"]]
-    if best.values["chi"] > -0.01:
-        statements.append(f"chi runs to its Iwan limit ({best.values['chi']:.3f}): the fit "
-                          f"levels want the damping to grow at least as fast as the amplitude")
+    sel = r["selection"]["judged"]["selection"]
+    test = fit_test_of(best, r["selection"]["judge_noise"])
+    base = r["base_fit"]
+    statements = [f"model: {r['candidate']} (the one judge's choice"
+                  + (", unexplained: no candidate brings the fit levels within their noise; "
+                     "the closest one is kept" if sel.unexplained else "") + ")",
+                  f"chi2 = {best.chi2:.1f} on {best.dof} degrees of freedom, fit test p = "
+                  f"{test.p_value:.2g} ({test.test})" if test.p_value is not None else
+                  f"chi2 = {best.chi2:.1f} ({test.test})",
+                  f"base model (no cause): chi2 = {base.chi2:.1f} on {base.dof} degrees of "
+                  f"freedom", _tie_statement(data, mask)["text"]]
+    for n in best.free:
+        if best.at_bound.get(n):
+            statements.append(f"{n} sits on its {best.at_bound[n]} bound "
+                              f"({best.values[n]:.4g}); its interval is a profile, and the "
+                              f"predictions hold it there")
     for row in held:
         statements.append(f"level {row['level']} (held out): frequency {row['error_hz']:+.4f} Hz"
                           f", zeta {100 * row['error_zeta_rel']:+.2f} % "
                           f"({row['error_sigma'][0]:+.0f} / {row['error_sigma'][1]:+.0f} sigma)")
-    micro = r["micro_slip_fit"]
-    if micro is not best:
-        statements.append(f"without macro-slip (beta = 0) chi2 = {micro.chi2:.1f}: the fit "
-                          f"puts phi_max at the top fit levels to bend them")
     sens = {}
     for name, s in r["sensitivity"].items():
         sens[name] = s
@@ -124,7 +141,12 @@ def summary(r: dict) -> dict:
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
             "derived": derived, "levels": levels, "misfit": statements,
-            "tie": _tie_statement(data, mask), "micro_slip_chi2": micro.chi2,
+            "tie": _tie_statement(data, mask), "base_chi2": base.chi2,
+            "cause": sel.cause, "also": sel.also, "model": r["candidate"],
+            "unexplained": sel.unexplained, "fit_test": test.to_json(),
+            "evidence": r["selection"]["judged"]["evidence"],
+            "untested": r["selection"]["untested"], "rule": "inverse.judge.select",
+            "failed_simulations": best.failed_simulations,
             "sensitivity": sens, "assumptions": assumptions,
             "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
             "confidence": r["settings"].confidence, "executor": r["executor"],
@@ -134,8 +156,12 @@ def summary(r: dict) -> dict:
 def format_text(s: dict) -> str:
     """Readable summary (the command's default output)."""
     n = s["noise"]
+    ft = s["fit_test"]
     lines = [f"iwanfe update --case double-beam  ({s['source']}, mode {s['mode']}, fit levels "
              f"{s['fit_levels'][0]}-{s['fit_levels'][-1]})",
+             f"model: {s['model']} (cause {s['cause']}"
+             + (f" + {', '.join(s['also'])}" if s["also"] else "") + "; chosen by the one "
+             f"judge, as diagnose --case; fit test p = {_fmt(ft['p_value'], 2)}, {ft['test']})",
              f"noise: sigma_omega2 = {n['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = "
              f"{n['sigma_zeta'][0]:.3g} ({n['source']})",
              f"{'parameter':26s} {'value':>14s}  {int(100 * s['confidence'])}% profile interval"
@@ -143,8 +169,9 @@ def format_text(s: dict) -> str:
     for name, p in s["parameters"].items():
         iv = p.get("interval")
         ivs = f"{_fmt(iv[0])} .. {_fmt(iv[1])}" if iv else ""
+        ab = f" / at {p['at_bound']} bound" if p.get("at_bound") else ""
         lines.append(f"{_LABEL.get(name, name):26s} {p['value']:14.7g}  {ivs:28s} "
-                     f"{p.get('status', '')} / {p['kind']}")
+                     f"{p.get('status', '')} / {p['kind']}{ab}")
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
                  f"F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} "
@@ -158,6 +185,8 @@ def format_text(s: dict) -> str:
                      f"{row['error_hz']:+9.4f} {row['measured']['zeta']:11.6f} "
                      f"{row['model']['zeta']:12.6f} {100 * row['error_zeta_rel']:+8.3f} "
                      f"{row['slip_over_phi_max']:11.3g}")
+    for c, why in s["untested"].items():
+        lines.append(f"not tested: {c} ({why})")
     lines.append("misfit:")
     lines.extend(f"  - {t}" for t in s["misfit"])
     for name, sv in s["sensitivity"].items():
@@ -185,7 +214,8 @@ def markdown(s: dict) -> str:
     rows = "\n".join(f"| {_LABEL.get(n, n)} | {p['value']:.7g} | "
                      f"{_fmt((p.get('interval') or [None, None])[0])} .. "
                      f"{_fmt((p.get('interval') or [None, None])[1])} | {p.get('status', '')} | "
-                     f"{p['kind']} | {p['description']} |" for n, p in s["parameters"].items())
+                     f"{p['kind']}{' (at ' + p['at_bound'] + ' bound)' if p.get('at_bound') else ''} | "
+                     f"{p['description']} |" for n, p in s["parameters"].items())
     lv = "\n".join(f"| {r['level']}{'*' if r['held_out'] else ''} | "
                    f"{r['measured']['frequency_hz']:.5f} | {r['model']['frequency_hz']:.5f} | "
                    f"{r['error_hz']:+.4f} | {r['measured']['zeta']:.6f} | {r['model']['zeta']:.6f} | "
@@ -212,12 +242,15 @@ element per glue node, first-harmonic balance with the exact describing function
 phase resonance of the mode) is fitted by weighted least squares to omega^2 and zeta of
 the fit levels. Noise: {s['noise']['source']}: sigma_omega2 =
 {s['noise']['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = {s['noise']['sigma_zeta'][0]:.3g}.
-Intervals: profile likelihood at {int(100 * s['confidence'])} %, widened by the misfit
-(chi2/dof) when the model misfits.
+Model: **{s['model']}** (cause `{s['cause']}`), chosen by the one judge as in `diagnose
+--case` (fit test p = {s['fit_test']['p_value']:.2g}, {s['fit_test']['test']}).
+Intervals at {int(100 * s['confidence'])} %: profile likelihood for a parameter on its
+bound (the bound then ends the interval) or with `--profiles all`, else linearized;
+widened by the misfit (chi2/dof) when the model misfits.
 
 ## Parameters
 
-| parameter | value | interval | status | kind | meaning |
+| parameter | value | interval | status | kind (at_bound) | meaning |
 | --- | --- | --- | --- | --- | --- |
 {rows}
 
@@ -263,16 +296,18 @@ def write_update(r: dict, out) -> list:
     data, mask, noise = r["data"], r["fit_mask"], r["noise"]
     f = np.sqrt(data.omega2) / (2 * math.pi)
     models = {"updated FE model": (r["prediction"].frequency_hz, r["prediction"].zeta)}
-    if r["micro_slip_fit"] is not r["fit"]:
-        mp = r["micro_slip_prediction"]
-        models["FE, beta = 0 (micro-slip)"] = (mp.frequency_hz, mp.zeta)
+    if r["base_fit"] is not r["fit"]:
+        mp = r["base_prediction"]
+        models["base FE model (no cause)"] = (mp.frequency_hz, mp.zeta)
     plot_level_models(data.level, f, data.zeta, noise.sigma_omega2 / (8 * math.pi ** 2 * f),
                       noise.sigma_zeta, models, ~mask, title="FE model updating, double beam",
                       path=out / "update_levels.png")
     plot_profiles({_LABEL.get(n, n): ([q.value for q in p.points], p.delta, p.threshold, p.best)
                    for n, p in r["profiles"].items()}, title="profile likelihoods",
                   path=out / "update_profiles.png")
-    model = {"case": "double-beam", "parameters": s["parameters"], "joint": s["derived"],
+    model = {"case": "double-beam", "cause": s["cause"], "also": s["also"],
+             "model": s["model"], "unexplained": s["unexplained"],
+             "fit_test": s["fit_test"], "parameters": s["parameters"], "joint": s["derived"],
              "fit_levels": s["fit_levels"], "noise": s["noise"],
              "base_parameters": list(BASE_PARAMETERS)}
     files = {"updated_model.json": model, "update.json": s}

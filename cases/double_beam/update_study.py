@@ -1,26 +1,29 @@
 """Model updating of the FE double beam: the glue joint, the damping and the frequency
-fitted to the measured levels by the nonlinear FE simulation itself.
+fitted to the measured levels by the nonlinear FE simulation itself, in the form the one
+judge selects.
 
 :func:`run_update` (``iwanfe update --case double-beam``):
 
-1. the measured mode's levels (:func:`cases.double_beam.settings.measured_levels`), the
-   fit levels (default 1-7) and the noise model (:func:`inverse.update.noise_model`);
-2. the base FE model (:mod:`cases.double_beam.fe_levels`: one continuous Iwan element
-   per glue node, viscous modal damping, first-harmonic balance at phase resonance)
-   fitted in ``chi``, ``ln_dc1`` (the glue's modal damping at level 1, ``|kappa1| B~``),
-   ``zeta_v`` and ``f0_hz`` at the assumed ``K_T = 1e8 N/m`` and ``beta = 0``
-   (:func:`inverse.update.fit`, several starts: the paper's estimator
-   :func:`inverse.estimate.estimate` is one of them, not the answer);
-3. profile likelihoods (:mod:`inverse.profile`) of those four and of ``log10_kt`` (each
-   K_T its own model, grip re-calibrated to 252.0 Hz) and ``ln_phimax`` (where macro-slip
-   starts; ``beta = 0`` at and above its micro-slip limit), run as
-   executor tasks; a K_T or beta whose profile has a better optimum than the assumed
-   value is refitted there (it is then *fitted*);
-4. which parameters the data determine, and along the profiles of those they do not,
-   the range of every headline figure: predicted frequency and damping at the
-   held-out levels and the top slip over ``phi_max``;
-5. the same figures after refitting with each assumed property changed
-   (:mod:`cases.double_beam.update_assumptions`).
+1. the measured mode's levels (:func:`cases.double_beam.settings.measured_levels`) and
+   the fit levels (default 1-7);
+2. the model choice of :func:`cases.double_beam.fe_select.fe_select`, the same as
+   ``diagnose --case double-beam``: the base FE model (one continuous Iwan element per
+   glue node, viscous modal damping, first-harmonic balance at phase resonance; ``chi``,
+   ``ln_dc1`` = ``|kappa1| B~`` at level 1, ``zeta_v``, ``f0_hz`` fitted at the assumed
+   ``K_T = 1e8 N/m``) and each testable cause's FE realization, judged by
+   :func:`inverse.judge.select` (fit test, cost per cause, held-out gain > 1, noise of
+   :func:`inverse.judge.noise_model`). The updated model is the selected one (the
+   closest candidate when the answer is ``unexplained``, and the report says so);
+3. profile likelihoods (:mod:`inverse.profile`) of the fitted parameters on a bound,
+   as executor tasks; the others get linearized intervals. With ``--profiles all``:
+   of every fitted parameter, and of ``log10_kt`` (each K_T its own model, grip
+   re-calibrated to 252.0 Hz; a grid value is adopted only when it lowers chi2 by more
+   than the cost of one parameter, :data:`FREE_COST`; K_T is then *fitted* on the grid);
+4. along the profiles of what the data do not determine, the range of every headline
+   figure: predicted frequency and damping at the held-out levels, top slip over
+   ``phi_max``;
+5. with ``--assumptions``, the same figures after refitting with each assumed
+   property changed (:mod:`cases.double_beam.update_assumptions`).
 
 The force scale (N per excitation unit) is not a parameter: every simulated omega^2 and
 zeta is exactly invariant to it (:mod:`cases.double_beam.joint_setup`); R~, phi_max and
@@ -31,33 +34,34 @@ from __future__ import annotations
 import hashlib
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from cases.double_beam.fe_causes import MacroSlip
-from cases.double_beam.fe_levels import BASE_PARAMETERS, DEFAULT_KT, DoubleBeamLevels, Simulator
+from cases.double_beam.fe_levels import BASE_PARAMETERS, DoubleBeamLevels
+from cases.double_beam.fe_select import Headline, chosen_model, fe_select
 from cases.double_beam.model import DoubleBeamConfig
 from cases.double_beam.settings import DEFAULT_DATA
 from ident.measured import read_measured
-from inverse.estimate import estimate, parse_levels
+from inverse.estimate import parse_levels
 from inverse.profile import linear_grid, run_profiles
-from inverse.update import Parameter, UpdateProblem, fit, noise_model
+from inverse.update import fit
 
-__all__ = ["UpdateSettings", "base_parameters", "base_fit", "headline", "run_update"]
+__all__ = ["UpdateSettings", "load_levels", "problem_digest", "run_update"]
 
-#: Fitted by ``update``: the base parameters and phi_max (macro-slip onset, via beta).
-UPDATED_PARAMETERS = BASE_PARAMETERS + ("ln_phimax",)
-#: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
-MICRO_LIMIT = 50.0
-KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 0.5), 6))
+#: Parameters ``update`` may fit: the base ones and those of the FE causes.
+UPDATED_PARAMETERS = BASE_PARAMETERS + ("ln_phimax", "drag_cd", "k3", "drift", "inv_e_sat")
+KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 1.0), 6))
 
 
 @dataclass(frozen=True)
 class UpdateSettings:
     """What ``iwanfe update`` fits: the data (default the shipped paper data, mode label
     2), the fit levels, the force scale (N per excitation unit, assumed), the profile
-    confidence, the K_T grid (log10 N/m) and the step of the phi_max scan (ln units)."""
+    confidence, the K_T grid (log10 N/m), the points per profile branch, whether to
+    refit under changed assumptions, which parameters to profile (``bound``: those on a
+    bound; ``all``)."""
 
     data_path: str | None = None
     mode_label: int = 2
@@ -65,9 +69,9 @@ class UpdateSettings:
     force_scale: float = 1.0
     confidence: float = 0.95
     kt_grid: tuple = KT_GRID
-    phimax_step: float = 0.5
-    profile_points: int = 4
-    assumptions: bool = True
+    profile_points: int = 3
+    assumptions: bool = False
+    profiles: str = "bound"
 
     def __post_init__(self):
         if not (math.isfinite(self.force_scale) and self.force_scale > 0):
@@ -75,10 +79,12 @@ class UpdateSettings:
         if not 0 < self.confidence < 1:
             raise ValueError(f"confidence must be in (0, 1), got {self.confidence!r}")
         parse_levels(self.fit_levels)
+        if self.profiles not in ("bound", "all"):
+            raise ValueError(f"profiles must be 'bound' or 'all', got {self.profiles!r}")
 
 
 def load_levels(settings: UpdateSettings):
-    """The measured levels, the fit mask and the noise model."""
+    """The measured levels and the fit mask."""
     data = read_measured(settings.data_path or DEFAULT_DATA).for_mode(settings.mode_label)
     if data.test[0] != "stepped-sine":
         raise ValueError(f"{data.source}: test = {data.test[0]}: update simulates the "
@@ -94,66 +100,7 @@ def load_levels(settings: UpdateSettings):
                          f"(levels {list(map(int, data.level))})")
     if len(fit_levels) < 5:
         raise ValueError(f"--fit-levels: need at least 5 levels, got {len(fit_levels)}")
-    mask = np.isin(data.level, fit_levels)
-    return data, mask, noise_model(data, mask)
-
-
-def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
-    """Parameters of the base model and their starts; the start list holds the paper's
-    estimator (``exact``, the fit levels) and three others of chi."""
-    lv = [int(v) for v in data.level[mask]]
-    w1 = math.sqrt(float(data.omega2[0]))
-    chi0, dc0, zv0, f00 = -0.4, 2.0 * float(data.omega2[0]) * 1e-4, float(data.zeta[0]), w1 / (2 * math.pi)
-    try:
-        est = estimate(data, fit_levels=lv, method="exact")
-        if -0.98 < est.chi < -0.005 and est.kappa1_B > 0:
-            chi0, dc0 = est.chi, est.kappa1_B
-            zv0 = est.c_modal / (2.0 * math.sqrt(est.omega2_linear))
-            f00 = math.sqrt(est.omega2_linear) / (2 * math.pi)
-    except ValueError:
-        est = None
-    P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
-         "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
-                             "ln |kappa1| B~ at level 1: the glue's modal damping there"),
-         "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
-                             "viscous modal damping ratio"),
-         "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
-                            "stuck-glue natural frequency of the mode"),
-         "log10_kt": Parameter("log10_kt", math.log10(DEFAULT_KT), 6.0, 11.0, 0.5, "log10 N/m",
-                               "stuck tangential stiffness of the whole glue"),
-         "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
-                                "1", "ln(phi_max / a_ref): macro-slip onset in units of "
-                                "the level-1 glue slip (beta = 0 above its limit)")}
-    starts = [{}] + [{"chi": c} for c in (-0.15, -0.5, -0.8) if abs(c - chi0) > 0.05]
-    return P, starts
-
-
-def base_fit(problem: UpdateProblem, starts, free=BASE_PARAMETERS):
-    """The best of the fits from every start."""
-    best = None
-    for s in starts:
-        f = fit(problem, free, start=s)
-        if best is None or f.chi2 < best.chi2:
-            best = f
-    return best
-
-
-@dataclass
-class Headline:
-    """``describe`` of :class:`inverse.update.UpdateProblem`: the headline figures of a
-    parameter set: frequency (Hz) and zeta at the held-out levels, top slip over
-    phi_max, R~ and phi_max (picklable)."""
-
-    fe: DoubleBeamLevels
-    held_out: np.ndarray
-    extension: object = None
-
-    def __call__(self, values: dict) -> dict:
-        pred = self.fe.predict(values, self.extension)
-        h = np.flatnonzero(self.held_out)
-        return {"frequency_hz": pred.frequency_hz[h].tolist(), "zeta": pred.zeta[h].tolist(),
-                "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1]),
-                "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
+    return data, np.isin(data.level, fit_levels)
 
 
 def _ranges(items: list) -> dict:
@@ -175,83 +122,76 @@ def problem_digest(data, mask, settings: UpdateSettings) -> str:
     return h.hexdigest()
 
 
+#: chi2 drop that frees an assumed parameter (K_T): the judge's cost of one parameter
+#: (AIC, :mod:`inverse.judge`).
+FREE_COST = 2.0
+
+
+def _adopt(problem, best, profiles):
+    """A profile point better than ``best`` refitted there: a second optimum of the
+    fitted parameters at any drop; a grid value of an assumed one (K_T) only when it
+    lowers chi2 by more than :data:`FREE_COST` (it then costs one parameter)."""
+    for name, pr in profiles.items():
+        low = min(pr.points, key=lambda p: p.chi2)
+        cost = 1e-6 if name in best.free else FREE_COST
+        if low.values is not None and low.chi2 < best.chi2 - cost:
+            again = fit(problem, best.free, start=low.values)
+            best = again if again.chi2 <= low.chi2 else fit(problem, (), start=low.values)
+    return best
+
+
 def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
                progress: bool = False, store=None) -> dict:
-    """Fit, profile and assess the base FE model (module docstring). ``store``: a
+    """Select, fit, profile and assess the FE model (module docstring). ``store``: a
     directory where finished profile branches are kept (a rerun loads them). Returns a
     dict (rendered by :mod:`cases.double_beam.update_report`)."""
     t0 = time.perf_counter()
-    data, mask, noise = load_levels(settings)
+    data, mask = load_levels(settings)
     fe = DoubleBeamLevels.from_data(data, force_scale=settings.force_scale)
-    P, starts = base_parameters(data, mask, fe)
-    problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
-                            describe=Headline(fe, ~mask))
-    micro = base_fit(problem, starts)                       # beta = 0
-    # macro-slip may fit better: scan phi_max down from the micro-slip limit (the others
-    # refitted) to the level-1 slip, then fit all from the best point
-    pm0 = MacroSlip.micro_limit(fe, micro.values)
-    top = math.log(float(data.excitation[mask].max() / data.excitation[0]))
-    first = min(pm0, top + 2.0)
-    scan_grid = list(np.arange(first, -1e-9, -settings.phimax_step))
-    seed = replace(micro, values=dict(micro.values, ln_phimax=pm0 + 1e-9))
-    half = (len(scan_grid) + 1) // 2                       # two tasks of the executor
-    t_micro = time.perf_counter() - t0
-    scan = run_profiles(problem, seed, {"ln_phimax": (scan_grid[:half], scan_grid[half:])},
-                        BASE_PARAMETERS, settings.confidence, stop_factor=math.inf,
-                        executor=executor)
-    low = min(scan["ln_phimax"].points, key=lambda p: p.chi2)
-    best = micro
-    if low.values is not None and low.chi2 < micro.chi2 - 1e-6:
-        best = fit(problem, UPDATED_PARAMETERS, start=low.values)
-    t_scan = time.perf_counter() - t0 - t_micro
-    macro = best is not micro
-    free = UPDATED_PARAMETERS if macro else BASE_PARAMETERS
+    sel = fe_select(data, mask, fe)
+    ext, chosen = chosen_model(sel)
+    problem, best, noise = chosen.problem, chosen.fit, sel["noise"]
+    P, free = problem.parameters, best.free
+    t_sel = time.perf_counter() - t0
     store = None if store is None else (store, problem_digest(data, mask, settings))
-    # K_T first (each value its own calibrated model): a better optimum there is adopted
-    # before the other profiles are taken around the final optimum
-    kt = best.values["log10_kt"]
-    kt_grid = {"log10_kt": ([g for g in sorted(settings.kt_grid, reverse=True) if g < kt],
-                            [g for g in sorted(settings.kt_grid) if g > kt])}
-    t_fit = time.perf_counter() - t0
-    profiles = run_profiles(problem, best, kt_grid, free, settings.confidence,
-                            executor=executor, progress=progress, store=store)
-    low = min(profiles["log10_kt"].points, key=lambda p: p.chi2)
-    if low.values is not None and low.chi2 < best.chi2 - 1e-6:
-        again = fit(problem, free, start=low.values)        # K_T stays at that grid value
-        best = again if again.chi2 <= low.chi2 else fit(problem, (), start=low.values)
-    grids = {n: linear_grid(best, n, P[n], settings.profile_points) for n in free}
-    profiles.update(run_profiles(problem, best, grids, free, settings.confidence,
-                                 executor=executor, progress=progress, store=store))
-    if not macro:
-        profiles["ln_phimax"] = scan["ln_phimax"]
-    for pr in profiles.values():           # a profile found a better optimum: adopt it
-        low = min(pr.points, key=lambda p: p.chi2)
-        if low.values is not None and low.chi2 < best.chi2 - 1e-6:
-            again = fit(problem, free, start=low.values)
-            best = again if again.chi2 <= low.chi2 else fit(problem, (), start=low.values)
-    t_prof = time.perf_counter() - t0
+    profiles = {}
+    if settings.profiles == "all":
+        kt = best.values["log10_kt"]
+        kt_grid = {"log10_kt": ([g for g in sorted(settings.kt_grid, reverse=True) if g < kt],
+                                [g for g in sorted(settings.kt_grid) if g > kt])}
+        profiles = run_profiles(problem, best, kt_grid, free, settings.confidence,
+                                executor=executor, progress=progress, store=store)
+        best = _adopt(problem, best, profiles)
+    names = [n for n in free if settings.profiles == "all" or best.at_bound.get(n)]
+    grids = {n: linear_grid(best, n, P[n], settings.profile_points) for n in names}
+    if grids:
+        profiles.update(run_profiles(problem, best, grids, free, settings.confidence,
+                                     executor=executor, progress=progress, store=store))
+        best = _adopt(problem, best, profiles)
+    t_prof = time.perf_counter() - t0 - t_sel
     assumed = []
     if settings.assumptions:
         from cases.double_beam.update_assumptions import assumption_sensitivity
 
         assumed = assumption_sensitivity(data, mask, noise, P, best, settings.force_scale,
-                                         Headline, executor)
+                                         Headline, executor, extension=ext)
     sens = {}
     for name, pr in profiles.items():
         if pr.status != "determined":
             inside = [p for p in pr.inside() if p.extra is not None]
             sens[name] = _ranges([p.extra for p in inside])
             sens[name]["grid_inside"] = [p.value for p in inside]
+    base = sel["base"].fit
     return {
         "settings": settings, "data": data, "fit_mask": mask, "noise": noise,
-        "parameters": P, "fit": best, "micro_slip_fit": micro, "profiles": profiles,
-        "micro_limit": MacroSlip.micro_limit(fe, best.values), "scan": scan["ln_phimax"],
-        "prediction": fe.predict(best.values), "micro_slip_prediction": fe.predict(micro.values),
+        "selection": sel, "extension": ext, "candidate": chosen.name,
+        "parameters": P, "fit": best, "base_fit": base, "profiles": profiles,
+        "micro_limit": MacroSlip.micro_limit(fe, best.values),
+        "prediction": fe.predict(best.values, ext), "base_prediction": fe.predict(base.values),
         "nominal": problem.describe(best.values), "sensitivity": sens,
         "executor": executor if isinstance(executor, str) else executor.describe(),
         "assumptions": assumed,
-        "timing_s": {"base fit": t_micro, "phi_max scan and fit": t_scan,
-                     "profiles and refit": t_prof - t_fit,
-                     "assumptions": time.perf_counter() - t0 - t_prof,
+        "timing_s": {"model choice (fits, judge)": t_sel, "profiles and refit": t_prof,
+                     "assumptions": time.perf_counter() - t0 - t_sel - t_prof,
                      "total": time.perf_counter() - t0},
     }

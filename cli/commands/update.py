@@ -32,10 +32,13 @@ def register(subparsers) -> None:
             "four-parameter Iwan element per glue node (first-harmonic balance, exact "
             "describing function, phase resonance of the measured mode) fitted to omega^2 "
             "and zeta of the fit levels: chi, the glue's modal damping at level 1 (R~), the "
-            "viscous damping, the stuck frequency and phi_max (F_S, beta); the glue "
-            "stiffness K_T by its profile (grip re-calibrated for each). Reports profile-"
-            "likelihood intervals, which parameters the data determine, the misfit, and how "
-            "the held-out predictions move with the undetermined ones."),
+            "viscous damping and the stuck frequency, plus the FE realization of the cause "
+            "the one judge selects (the same choice as diagnose --case: fit test, cost per "
+            "cause, held-out gain > 1); the glue stiffness K_T by its profile (grip "
+            "re-calibrated for each). updated_model.json is the selected model. Reports "
+            "at_bound and intervals of every fitted parameter (profile likelihood on a "
+            "bound), the misfit, and how the held-out predictions move with the "
+            "undetermined ones."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--case", required=True, choices=("double-beam",),
                         help="the FE model")
@@ -50,6 +53,12 @@ def register(subparsers) -> None:
                         help="write updated_model.json, update.json, report.md and figures; "
                              "finished profile branches are kept in DIR/profiles (a rerun "
                              "resumes)")
+    parser.add_argument("--profiles", choices=("bound", "all"), default="bound",
+                        help="profile likelihoods of the fitted parameters on a bound "
+                             "(others linearized), or of all of them and of K_T (slower)")
+    parser.add_argument("--assumptions", action="store_true",
+                        help="also refit under changed assumed properties (E, rho, masses, "
+                             "glue elements; slower)")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     add_executor_arguments(parser)
     parser.set_defaults(func=run)
@@ -60,7 +69,8 @@ def run(args) -> int:
     from cases.double_beam.update_study import UpdateSettings, run_update
 
     settings = UpdateSettings(data_path=args.data, mode_label=args.mode,
-                              fit_levels=args.fit_levels, force_scale=args.force_scale)
+                              fit_levels=args.fit_levels, force_scale=args.force_scale,
+                              profiles=args.profiles, assumptions=args.assumptions)
     spec = executor_from_args(args)
     store = None if args.out is None else str(Path(args.out) / "profiles")
     result = run_update(settings, executor=spec, progress=True, store=store)

@@ -1,0 +1,237 @@
+"""The FE-level model choice shared by ``diagnose --case double-beam`` and ``update``.
+
+:func:`fe_select` fits, on the fit levels, the base FE model
+(:mod:`cases.double_beam.fe_levels`) and the FE realization of every cause the data can
+test (:mod:`cases.double_beam.fe_causes`), then pairs of the best single cause with
+each other cause that earned its cost alone (unless the best single is already so good
+that no pair could outweigh it), and lets the one judge choose
+(:func:`inverse.fe_selection.judge_extensions` -> :func:`inverse.judge.select`: fit
+test, cost per cause, held-out gain > 1; ``unexplained`` when no candidate brings the
+fit levels within their noise).
+
+Noise (:func:`fe_noise`): :func:`inverse.judge.noise_model` of the whole series, the
+abscissa of the one-mode diagnosis (``excitation / (zeta omega^2)``, or the held
+response amplitude): the identification's stds plus the repeatability, so the FE level
+and the one-mode diagnosis judge the same table against the same noise.
+
+Not tested (:func:`untestable`): ``thermal-drift`` when the run order is monotone in
+amplitude (a drift with time cannot be told from an amplitude effect);
+``nonproportional-amplitude`` always (the FE fit compares omega^2 and zeta only: a force
+shortfall changes the abscissa of a law that chi already bends; it needs a response
+channel).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cases.double_beam.fe_causes import EXTENSIONS, Combined
+from cases.double_beam.fe_levels import BASE_PARAMETERS, DEFAULT_KT, DoubleBeamLevels, Simulator
+from inverse import judge
+from inverse.fe_selection import FitCandidate, judge_extensions
+from inverse.estimate import estimate
+from inverse.update import InternalError, NoiseModel, Parameter, UpdateProblem, fit
+
+__all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable",
+           "fit_base", "fe_select", "chosen_model"]
+
+#: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
+MICRO_LIMIT = 50.0
+
+
+def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
+    """Parameters of the base model and their starts; the start list holds the paper's
+    estimator (``exact``, the fit levels) and three others of chi."""
+    lv = [int(v) for v in data.level[mask]]
+    w1 = math.sqrt(float(data.omega2[0]))
+    chi0, dc0, zv0, f00 = -0.4, 2.0 * float(data.omega2[0]) * 1e-4, float(data.zeta[0]), w1 / (2 * math.pi)
+    try:
+        est = estimate(data, fit_levels=lv, method="exact")
+        if -0.98 < est.chi < -0.005 and est.kappa1_B > 0:
+            chi0, dc0 = est.chi, est.kappa1_B
+            zv0 = est.c_modal / (2.0 * math.sqrt(est.omega2_linear))
+            f00 = math.sqrt(est.omega2_linear) / (2 * math.pi)
+    except ValueError:
+        est = None
+    P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
+         "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
+                             "ln |kappa1| B~ at level 1: the glue's modal damping there"),
+         "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
+                             "viscous modal damping ratio"),
+         "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
+                            "stuck-glue natural frequency of the mode"),
+         "log10_kt": Parameter("log10_kt", math.log10(DEFAULT_KT), 6.0, 11.0, 0.5, "log10 N/m",
+                               "stuck tangential stiffness of the whole glue"),
+         "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
+                                "1", "ln(phi_max / a_ref): macro-slip onset in units of "
+                                "the level-1 glue slip (beta = 0 above its limit)")}
+    starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
+    return P, starts
+
+
+@dataclass
+class Headline:
+    """``describe`` of :class:`inverse.update.UpdateProblem`: the headline figures of a
+    parameter set: frequency (Hz) and zeta at the held-out levels, top slip over
+    phi_max, R~ and phi_max (picklable)."""
+
+    fe: DoubleBeamLevels
+    held_out: np.ndarray
+    extension: object = None
+
+    def __call__(self, values: dict) -> dict:
+        pred = self.fe.predict(values, self.extension)
+        h = np.flatnonzero(self.held_out)
+        return {"frequency_hz": pred.frequency_hz[h].tolist(), "zeta": pred.zeta[h].tolist(),
+                "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1]),
+                "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
+
+
+
+
+def fe_noise(data):
+    """(judge noise, :class:`inverse.update.NoiseModel` of its totals) of one mode's
+    levels (module docstring)."""
+    x = np.asarray(data.response_amplitude, float) if data.response_controlled else \
+        data.excitation / (data.zeta * data.omega2)
+    jn = judge.noise_model(x, {"omega2": data.omega2, "zeta": data.zeta},
+                           {"omega2": data.omega2_std, "zeta": data.zeta_std},
+                           data.level, data.run_order)
+    dof = [jn.dof[c] for c in ("omega2", "zeta")]
+    words = "; ".join(f"{c}: {jn.source[c]}" for c in ("omega2", "zeta"))
+    return jn, NoiseModel(jn.total["omega2"], jn.total["zeta"], words,
+                          dof=None if all(math.isinf(d) for d in dof) else int(min(dof)))
+
+
+def untestable(data) -> dict:
+    """Causes the data cannot test at the FE level, with the reason (module docstring)."""
+    out = {"nonproportional-amplitude": "the FE fit compares omega2 and zeta only; a force "
+                                        "shortfall needs a response channel"}
+    ro = np.asarray(data.run_order)
+    if np.all(np.diff(ro) > 0) or np.all(np.diff(ro) < 0):
+        out["thermal-drift"] = ("the levels were run in order of amplitude: a drift with "
+                                "time cannot be told from an amplitude effect")
+    return out
+
+
+#: Optimizer tolerance of the selection fits (chi2 to about 1e-6 relative).
+FIT_TOL = 1e-6
+
+
+def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
+    """The best fit from ``starts``, and the starts."""
+    best = None
+    for s in starts:
+        f = fit(problem, free, start=s, tol=FIT_TOL)
+        if best is None or (f.success, -f.chi2) > (best.success, -best.chi2):
+            best = f
+    return best, list(starts)
+
+
+def _problem(base_problem, fe, ext, base_pred, top):
+    spec = ext.spec(fe, base_pred, base_problem.noise, top)
+    P = dict(base_problem.parameters)
+    for s in (spec if isinstance(spec, list) else [spec]):
+        P[s.name] = s
+    return UpdateProblem(Simulator(fe, ext), base_problem.omega2, base_problem.zeta,
+                         base_problem.noise, base_problem.fit_mask, P,
+                         describe=Headline(fe, ~base_problem.fit_mask, ext))
+
+
+def _fit_extension(problem, ext, start_values, chi_starts):
+    """Multi-start fit of ``ext`` (its starts x ``chi_starts``) from ``start_values``;
+    (fit or None, the starts)."""
+    free = BASE_PARAMETERS + tuple(ext.parameter_names)
+    specs = [problem.parameters[n] for n in ext.parameter_names]
+    starts = [dict(start_values, chi=chi, **s0) for s0 in ext.start_sets(specs)
+              for chi in chi_starts]
+    f, s = fit_base(problem, starts, free)
+    return (f if f is not None and f.success else None), s
+
+
+def _inactive(ext, f) -> bool:
+    """The extension's parameter sits at its ``none`` value (the base model)."""
+    bound = {"lower": ext.lower, "upper": ext.upper}
+    return any(f.at_bound.get(n) and bound[f.at_bound[n]] == 0.0
+               for n in ext.parameter_names) or \
+        (ext.cause == "macro-slip" and f.at_bound.get("ln_phimax") == "upper")
+
+
+def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
+              progress=None) -> dict:
+    """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring).
+
+    Returns ``fe``, ``noise`` (update form), ``judge_noise``, ``base`` (FitCandidate),
+    ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
+    :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason) and
+    ``chosen`` (name of the selected candidate: the closest one when unexplained)."""
+    try:
+        return _select(data, mask, fe or DoubleBeamLevels.from_data(data), causes,
+                       progress or (lambda s: None))
+    except ValueError as exc:          # the input was checked before: ours, not the user's
+        raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
+
+
+def _select(data, mask, fe, causes, say) -> dict:
+    jn, noise = fe_noise(data)
+    P, starts = base_parameters(data, mask, fe)
+    base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
+                                 describe=Headline(fe, ~mask))
+    say("base")
+    bfit, base_starts = fit_base(base_problem, starts)
+    base = FitCandidate((), base_problem, bfit, base_starts)
+    base_pred = fe.predict(bfit.values)
+    top = int(np.flatnonzero(mask).max())
+    skip = untestable(data)
+    exts, singles = {}, []
+    # chi from the base optimum and from -0.5 (an extension can move chi far: a slip
+    # onset or a hardening bends the top levels, which chi then need not do)
+    chi_starts = sorted({bfit.values["chi"], -0.5})
+    for cause in (causes or EXTENSIONS):
+        if cause in skip:
+            continue
+        say(cause)
+        ext = EXTENSIONS[cause]
+        try:
+            prob = _problem(base_problem, fe, ext, base_pred, top)
+            f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
+        except (InternalError, ValueError, ArithmeticError) as exc:
+            # one cause that cannot be set up is counted and reported, not fatal
+            exts[cause] = (ext, FitCandidate((cause,), base_problem, None, [],
+                                             f"its fit failed: {exc}"))
+            continue
+        c = FitCandidate((cause,), prob, f, s)
+        if f is not None and _inactive(ext, f):
+            c.excluded = "its effect fitted to zero (the base model)"
+        exts[cause] = (ext, c)
+        singles.append(c)
+    ic = {c.name: c.fit.chi2 + 2 * c.fit.k + judge.T_CAUSE
+          for c in singles if c.fit is not None and not c.excluded}
+    base_ic = bfit.chi2 + 2 * bfit.k
+    # a pair (one more parameter, one more cause) has IC >= 2 (k + 1) + 2 T: when the
+    # best single is already below that, no pair can outweigh it, so none is fitted
+    best_single = min(ic.values(), default=math.inf)
+    if ic and best_single > 2 * (bfit.k + 2) + 2 * judge.T_CAUSE:
+        first = min(ic, key=ic.get)
+        for other in sorted(ic, key=ic.get):
+            if other == first or ic[other] >= base_ic:
+                continue
+            say(f"{first} + {other}")
+            pair = Combined(EXTENSIONS[first], EXTENSIONS[other])
+            prob = _problem(base_problem, fe, pair, base_pred, top)
+            f, s = _fit_extension(prob, pair, exts[first][1].fit.values,
+                                  [exts[first][1].fit.values["chi"]])
+            exts[pair.cause] = (pair, FitCandidate((first, other), prob, f, s))
+    judged = judge_extensions(base, [c for _, c in exts.values()], jn, progress=say)
+    return {"fe": fe, "noise": noise, "judge_noise": jn, "base": base, "extensions": exts,
+            "judged": judged, "untested": skip, "chosen": judged["selection"].best}
+
+
+def chosen_model(s: dict):
+    """(extension or None, FitCandidate) of the selected (or closest) candidate."""
+    name = s["chosen"]
+    if name == "none":
+        return None, s["base"]
+    return s["extensions"][name]
