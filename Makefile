@@ -19,7 +19,7 @@ $(STAMP): $(BIN)/python pyproject.toml
 install: $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/iwanfe reproduce double-beam --out results/double-beam
+	$(BIN)/iwanfe loop --case double-beam --out results/double-beam
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

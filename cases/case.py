@@ -17,6 +17,7 @@ CAPABILITIES = {
     "summary": "model summary (case check)",
     "measured_data": "measured data",
     "nonlinear_model": "nonlinear model with every joint parameter given (backbone)",
+    "update": "FE model updating against its measured levels (update, loop)",
 }
 
 

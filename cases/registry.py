@@ -43,6 +43,7 @@ def resolve_case(name_or_file: str):
 
             case.builders["nonlinear_model"] = lambda mode=None: build_nonlinear_case(
                 "double-beam", mode=mode)
+            case.builders["update"] = _double_beam_update
         return case
     if key == "lumped":
         return _lumped_case()
@@ -52,6 +53,15 @@ def resolve_case(name_or_file: str):
         return case_from_file(key)
     raise InputError(f"unknown case {key!r}: give a shipped name ({', '.join(SHIPPED)}) "
                      f"or a case file (.toml)")
+
+
+def _double_beam_update(executor="serial", progress=False, store=None, **settings):
+    """``run_update`` of the double beam on its shipped data (``settings``: fields of
+    :class:`cases.double_beam.update_study.UpdateSettings`)."""
+    from cases.double_beam.update_study import UpdateSettings, run_update
+
+    return run_update(UpdateSettings(**settings), executor=executor, progress=progress,
+                      store=store)
 
 
 def _lumped_case():

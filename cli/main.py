@@ -56,6 +56,7 @@ COMMANDS = [
     "diagnose",
     "backbone",
     "update",
+    "loop",
     "ringdown",
 ]
 

@@ -1,0 +1,57 @@
+"""``iwanfe loop``: the main job, the whole loop on one page (``make run``).
+
+Parses, asks the case for its ``update`` capability, calls
+:func:`cases.loop_report.run_loop`, prints the short summary
+(:func:`cases.loop_report.format_summary`) or the JSON document.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from cli import validate
+from cli.executor_options import add_executor_arguments, executor_from_args
+from runs.jsonio import print_json
+
+NAME = "loop"
+
+
+def register(subparsers) -> None:
+    from cases.registry import DEFAULT_CASE
+
+    parser = subparsers.add_parser(
+        NAME, help="the whole loop: update the FE model, say what it gets wrong, name the "
+                   "cause, measure the extended model's gain on held-out levels",
+        description=(
+            "The main job. The case's FE model is updated to the lower measured levels "
+            "(iwanfe update), the one judge chooses between the base model and its "
+            "extensions (iwanfe diagnose --case), and the page reports what the updated "
+            "base model gets wrong (with numbers), the cause named, the extended model and "
+            "its gain at the levels no fit saw. Writes report.md (one page, with its "
+            "figure), loop.json and the update's files in DIR/update."),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
+                        help="a case with measured levels and FE model updating")
+    parser.add_argument("--out", metavar="DIR", default="results/loop",
+                        help="output folder (profiles are kept: a rerun resumes)")
+    parser.add_argument("--json", action="store_true", help="print one JSON document")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_executor_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from cases.loop_report import format_summary, run_loop
+    from cases.registry import resolve_case
+
+    case = resolve_case(args.case)
+    case.require("update")
+    out = validate.output_dir(args.out, "--out")
+    s = run_loop(case, out, executor=executor_from_args(args),
+                 progress=not args.no_progress)
+    if args.json:
+        print_json(s)
+    else:
+        print(format_summary(s))
+        print(f"report: {Path(out) / 'report.md'}")
+    return 0
