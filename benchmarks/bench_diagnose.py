@@ -144,7 +144,8 @@ def _num(d, *keys):
 def coverage(results):
     """(covered, total) of the nominal 95 % held-out intervals, or None when the
     diagnosis reports none. Reads each prediction's measured value and its interval
-    (``lower``/``upper``, ``interval`` [lo, hi], or ``predicted`` +- ``half_width``)."""
+    (``lower``/``upper``, ``interval`` [lo, hi], or ``predicted`` +- ``half_width``),
+    per row or per channel of a row (``{"level", "omega2": {...}, "zeta": {...}}``)."""
     covered = total = 0
     seen = False
     for r in results:
@@ -154,7 +155,9 @@ def coverage(results):
         seen = True
         if isinstance(preds, dict):
             preds = preds.get("predictions", preds.get("rows", []))
-        for p in preds or []:
+        flat = [c for item in preds or [] for c in
+                [item] + [v for v in item.values() if isinstance(v, dict)]]
+        for p in flat:
             y = _num(p, "measured", "observed", "value", "y")
             lo, hi = _num(p, "lower", "lo", "low"), _num(p, "upper", "hi", "high")
             if lo is None and isinstance(p.get("interval"), (list, tuple)):
