@@ -3,7 +3,9 @@ to a visibility in noise units (ranges in the package doc).
 
 Sizing: every mechanism's ``strength`` is set by bisection so that the predicted
 visibility (:func:`predicted_visibility`: the backbone at each run's resonance with
-and without it, :func:`.rig.resonance`, in units of the run's noise) meets a target
+and without it, :func:`.rig.resonance`, in units of the run's noise: the planted
+repeatability and the identification sd of a noisy sizing pass without the hidden
+mechanisms) meets a target
 drawn log-uniformly in [5, 40]; the honest visibility, from identifying noise-free
 FRFs with and without it, is measured afterwards (:mod:`.measure`) and stored.
 """
@@ -39,7 +41,7 @@ class Plan:
     ``runs`` as (level index, :class:`.mechanisms.Run`, repeat flag); FRF noise
     ``eps_m``, ``eps_a``; ``force_column``, ``force_noise``; repeatability sds
     ``s_f`` (relative frequency) and ``s_z`` (relative damping); ``sigma_id`` the
-    predicted identification sd (omega2, zeta) of a level."""
+    identification sd (omega2, zeta) of each run without the hidden mechanisms."""
 
     control: str
     held: np.ndarray

@@ -16,8 +16,7 @@ from cases.synthetic_series.design import (TooLarge, add_mechanism, draw_exciter
 from cases.synthetic_series.mechanisms import Run
 from cases.synthetic_series.measure import (Refused, honest_visibility, identify_table,
                                             place_lines, simulate_runs)
-from cases.synthetic_series.rig import noisy, resonance
-from ident.identify import identify
+from cases.synthetic_series.rig import resonance
 from ident.modal_data import MeasuredData
 
 __all__ = ["CATALOGUE", "OUT_OF_CATALOGUE", "FAMILIES", "SyntheticSeries",
@@ -73,16 +72,13 @@ def without_stds(data: MeasuredData) -> MeasuredData:
 
 
 def _sigma_id(rng, st, plan):
-    """Identification sd (omega2, zeta) of the top level, one noisy identification."""
-    v = plan.held.size - 1
-    run = next(r for vv, r, _ in plan.runs if vv == v)
-    _, w2, z, zl = resonance(st, plan.control, plan.held[v], run)
-    w = np.sqrt(w2)
-    W = np.linspace(w * (1 - 4 * zl), w * (1 + 4 * zl), plan.n_lines)
-    H = 1.0 / (w2 - W**2 + 2j * z * w2 * (W / w))
-    with np.errstate(all="ignore"):
-        m = identify(W / (2 * np.pi), noisy(rng, H, plan.eps_m, plan.eps_a), n_modes=1).modes[0]
-    return float(m.omega2_std), float(m.zeta_std)
+    """Identification sd (omega2, zeta) per run of the structure without its hidden
+    mechanisms: the series simulated with noise and identified (the sizing pass)."""
+    place_lines(rng, st, plan)
+    data = identify_table(simulate_runs(rng, st, plan), plan)
+    rows = {(int(lv), int(ro)): i for i, (lv, ro) in enumerate(zip(data.level, data.run_order))}
+    idx = [rows[(v + 1, run.k)] for v, run, _ in plan.runs]
+    return data.omega2_std[idx], data.zeta_std[idx]
 
 
 def _attempt(rng, causes, ooc, n, control, rep_on, n_rep):

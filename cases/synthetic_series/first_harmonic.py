@@ -73,13 +73,18 @@ class SliderBank:
         dk, kq = np.zeros_like(X), np.zeros_like(X)
         if self.R > 0:
             p = self.chi + 1.0
-            b = np.minimum(X, self.lo)                      # power-law sliders that slip
             t = 0.5 * (_GX + 1.0)
-            phi = b[:, None] * t[None, :] ** (1.0 / p)
-            l_in, l_q = jenkins_loss(phi / X[:, None])
-            scale = self.R * b**p / p
-            dk += scale * (0.5 * l_in @ _GW)
-            kq += scale * (0.5 * l_q @ _GW)
+            micro = X <= self.lo     # self-similar: the quadrature of one amplitude scales
+            l_in, l_q = jenkins_loss(t ** (1.0 / p))
+            scale = self.R * X[micro] ** p / p
+            dk[micro] = scale * (0.5 * l_in @ _GW)
+            kq[micro] = scale * (0.5 * l_q @ _GW)
+            if np.any(~micro):      # sliders up to lo, all slipping
+                Xm = X[~micro]
+                l_in, l_q = jenkins_loss(self.lo * t[None, :] ** (1.0 / p) / Xm[:, None])
+                scale = self.R * self.lo**p / p
+                dk[~micro] = scale * (0.5 * l_in @ _GW)
+                kq[~micro] = scale * (0.5 * l_q @ _GW)
         dens = None
         if self.uniform > 0:
             dens = lambda phi: self.uniform + 0.0 * phi          # noqa: E731

@@ -94,9 +94,22 @@ class Structure:
         return 1.001 * target / c
 
 
+def _bracket(excess, lo, hi, rounds=4, n=16):
+    """Root of an increasing ``excess(log X)`` in [lo, hi] (arrays, one per line), by
+    ``rounds`` grids of ``n`` points (vectorized; resolution (hi-lo)/(n-1)^rounds)."""
+    for _ in range(rounds):
+        grid = lo[None, :] + (hi - lo)[None, :] * np.linspace(0.0, 1.0, n)[:, None]
+        big = excess(grid) > 0
+        i = np.where(big.any(axis=0), big.argmax(axis=0), n - 1)
+        cols = np.arange(lo.size)
+        lo, hi = grid[np.maximum(i - 1, 0), cols], grid[i, cols]
+    return 0.5 * (lo + hi)
+
+
 def _solve(st, W, target, run, n_iter=46):
-    """``X`` with ``X |D(X, W) + L(W)| = target`` per line, and a fold flag (the left
-    side not increasing on a grid: several steady states)."""
+    """``X`` with ``X |D(X, W) + L(W)| = target`` per line (bisection in log X,
+    vectorized over the lines), and a fold flag (the left side not increasing on a
+    grid: several steady states)."""
     L = st.exciter.load(W)
     hi = np.log(st.x_upper(target, W, run))
     lo = hi - math.log(1e7)
@@ -127,28 +140,28 @@ def solve_level(st: Structure, W, control: str, held: float, run: Run):
     return st.frf(D, W), np.abs(D) * X, X, fold
 
 
-def resonance(st: Structure, control: str, held: float, run: Run, n_iter=40):
+def resonance(st: Structure, control: str, held: float, run: Run):
     """Amplitude, natural frequency squared and damping ratio at the resonance of a
     level (the backbone at the peak amplitude, rad^2/s^2): the quick predictor of what
-    an identification returns, used to size the mechanisms and place the lines."""
+    an identification returns, used to size the mechanisms and place the lines.
+    Returns (X, omega2, zeta, zeta with the exciter's load)."""
     def at(X):
-        w2 = float((st.stiffness(X, 1.0, run)).real) + 1.0
-        w = math.sqrt(max(w2, 1e-12))
-        D = st.stiffness(X, w, run)
-        return w2, w, D
+        w2 = st.stiffness(X, 1.0, run).real + 1.0
+        w = np.sqrt(np.maximum(w2, 1e-12))
+        return w2, w, st.stiffness(X, w, run)
     if control == "response":
         X = float(held)
     else:
-        w2, w, _ = at(1e-12)
+        w = at(np.array(1e-12))[1]
         hi = math.log(float(st.x_upper(abs(st.exciter.gain(float(held), w)), w, run)))
-        lo = hi - math.log(1e7)
-        for _ in range(n_iter):
-            mid = 0.5 * (lo + hi)
-            w2, w, D = at(math.exp(mid))
-            big = math.exp(mid) * abs(D + st.exciter.load(w)) > abs(st.exciter.gain(float(held), w))
-            lo, hi = (lo, mid) if big else (mid, hi)
-        X = math.exp(0.5 * (lo + hi))
-    w2, w, D = at(X)
+
+        def excess(logx):
+            X = np.exp(logx)
+            w2, w, D = at(X)
+            return X * np.abs(D + st.exciter.load(w)) - np.abs(st.exciter.gain(float(held), w))
+        X = float(np.exp(_bracket(excess, np.array([hi - math.log(1e7)]), np.array([hi]))[0]))
+    w2, w, D = at(np.array(X))
+    w2, w = float(w2), float(w)
     zeta = float(D.imag) / (2 * w2)
     zeta_loaded = float((D + st.exciter.load(w)).imag) / (2 * w2)
     return X, w2, zeta, zeta_loaded
