@@ -11,7 +11,9 @@ Every violated rule raises :class:`ident.errors.InputError` with one line
 ``FILE:LINE:COLUMN: message`` (LINE 1-based, the header is line 1; COLUMN the column
 name, for a rule about a whole row the column the rule is about: ``level`` for a
 duplicate (mode, level), ``excitation`` for a non-increasing excitation, ``mode`` for
-too few levels). Blank lines are skipped. Beyond the spec the reader also rejects an
+too few levels). Repeats (rows sharing (mode, level) with different ``run_order``) are
+legal: the same level measured again; they count once toward the level count, and every
+row of a level must exceed (in the held amplitude) every row of the level below. Blank lines are skipped. Beyond the spec the reader also rejects an
 empty file, duplicated or empty header names, rows whose field count differs from the
 header, a non-integer or < 1 ``level``, non-integer ``mode``/``run_order``, and a mode
 whose rows mix both controls.
@@ -126,6 +128,24 @@ def _check_header(header: list[str], source: str) -> None:
                   + ", ".join(header) + ")")
 
 
+def _check_increasing(source, m, name, level, e, lines) -> None:
+    """Every row of a level must exceed every row of the level below it in ``e`` (rows
+    sorted by level; repeats of one level may differ among themselves)."""
+    ends = np.flatnonzero(np.diff(level) > 0)          # last row of each level but the top
+    starts = np.r_[0, ends + 1]
+    top = np.maximum.reduceat(e, starts)               # per level: max and min over repeats
+    low = np.minimum.reduceat(e, starts)
+    bad = np.flatnonzero(low[1:] <= top[:-1])
+    if bad.size:
+        k = bad[0]
+        j = starts[k + 1] + int(np.argmin(e[starts[k + 1]:starts[k + 2]
+                                            if k + 2 < starts.size else None]))
+        i = starts[k] + int(np.argmax(e[starts[k]:starts[k + 1]]))
+        _fail(source, lines[j], name,
+              f"mode {m}: {name} of level {level[j]} ({e[j]:g}) does not "
+              f"exceed that of level {level[i]} ({e[i]:g})")
+
+
 def read_measured(path) -> MeasuredData:
     """Read and validate a measured-data CSV file (``shared/spec/measured-data.md``).
 
@@ -205,32 +225,31 @@ def read_measured(path) -> MeasuredData:
                   lambda i: "control = response needs a response_amplitude column (the "
                             "amplitude each level held)")
 
-    # Duplicate (mode, level): report the second occurrence in file order.
-    key = np.stack([mode, level], axis=1)
+    # Duplicate (mode, level, run_order): report the second occurrence in file order.
+    # Rows sharing (mode, level) with different run orders are repeats (legal).
+    key = np.stack([mode, level, run_order], axis=1)
     _, first_index = np.unique(key, axis=0, return_index=True)
     dup = np.ones(n, bool)
     dup[first_index] = False
-    first_bad(dup, "level", lambda i: f"duplicate (mode, level) = ({mode[i]}, {level[i]})")
+    first_bad(dup, "level", lambda i: f"duplicate (mode, level, run_order) = ({mode[i]}, "
+                                      f"{level[i]}, {run_order[i]})")
 
     warnings: list[str] = []
     for m in np.unique(mode):
         idx = np.flatnonzero(mode == m)
-        idx = idx[np.argsort(level[idx], kind="stable")]
-        if idx.size < MIN_LEVELS:
+        idx = idx[np.lexsort((run_order[idx], level[idx]))]
+        n_levels = np.unique(level[idx]).size
+        if n_levels < MIN_LEVELS:
             _fail(source, lines[idx].min(), "mode",
-                  f"mode {m} has {idx.size} levels, at least {MIN_LEVELS} are needed")
+                  f"mode {m} has {n_levels} levels, at least {MIN_LEVELS} are needed")
         controls = np.unique(control[idx])
         if controls.size > 1:
             _fail(source, lines[idx].min(), "control",
                   f"mode {m} mixes control = force and response; one series has one control")
         name = "response_amplitude" if controls[0] == "response" else "excitation"
         e = response[idx] if name == "response_amplitude" else excitation[idx]
-        bad = np.flatnonzero(np.diff(e) <= 0)
-        if bad.size:
-            i, j = idx[bad[0]], idx[bad[0] + 1]
-            _fail(source, lines[j], name,
-                  f"mode {m}: {name} of level {level[j]} ({e[bad[0] + 1]:g}) does not "
-                  f"exceed that of level {level[i]} ({e[bad[0]]:g})")
+        _check_increasing(source, m, name, level[idx], e, lines[idx])
+        e = e[np.r_[True, np.diff(level[idx]) > 0]]     # one row per level for the ratios
         with np.errstate(over="ignore", invalid="ignore"):   # extreme but valid values
             ratio = e[1:] / e[:-1]
             median = np.median(ratio)

@@ -121,11 +121,39 @@ class MeasuredData:
             warnings=list(self.warnings))
 
     def for_mode(self, m: int) -> "MeasuredData":
-        """Entries of mode ``m`` sorted by level; ValueError if the mode is absent."""
+        """Entries of mode ``m`` sorted by level (repeats by run order); ValueError if
+        the mode is absent."""
         idx = np.flatnonzero(self.mode == int(m))
         if idx.size == 0:
             raise ValueError(f"mode {m} not in data (modes: {', '.join(map(str, self.modes))})")
-        return self.take(idx[np.argsort(self.level[idx], kind="stable")])
+        return self.take(idx[np.lexsort((self.run_order[idx], self.level[idx]))])
+
+
+def mean_per_level(d: MeasuredData) -> tuple[MeasuredData, str | None]:
+    """One mode's repeats (rows sharing a level) averaged per level: omega2, zeta,
+    excitation and response amplitude by their mean, the identification stds of a mean
+    ``sqrt(sum sd^2) / n``, run order and line of the first run. Returns the table and a
+    note saying what was averaged (None without repeats). ``d``: one mode sorted by level
+    and run order (:meth:`MeasuredData.for_mode`)."""
+    levels, start, count = np.unique(d.level, return_index=True, return_counts=True)
+    if levels.size == d.level.size:
+        return d, None
+    inv = np.unique(d.level, return_inverse=True)[1]
+
+    def mean(a):
+        return None if a is None else np.bincount(inv, a) / count
+
+    def sd(a):
+        return None if a is None else np.sqrt(np.bincount(inv, a**2)) / count
+
+    out = d.take(start)
+    out = replace(out, excitation=mean(d.excitation), omega2=mean(d.omega2),
+                  zeta=mean(d.zeta), response_amplitude=mean(d.response_amplitude),
+                  omega2_std=sd(d.omega2_std), zeta_std=sd(d.zeta_std))
+    rep = levels[count > 1]
+    return out, (f"repeats averaged per level: {d.level.size} rows -> {levels.size} "
+                 f"levels (level{'s' if rep.size > 1 else ''} "
+                 f"{', '.join(map(str, rep))} repeated)")
 
 
 def annotation_warnings(data: MeasuredData) -> list[str]:

@@ -13,7 +13,8 @@ and writes one row per mode and level:
   at resonance: the ``force`` column at ``omega_d``, else the held level over the
   measured ``|H(omega_d)|`` (interpolated between lines).
 
-``run_order`` comes from the files (all or none; default the file order),
+``run_order`` comes from the files (all or none; default the file order); files that
+held the same level (equal to 1e-9) are repeats of one level (rows sharing ``level``);
 ``omega2_std``/``zeta_std`` from the identification (:mod:`ident.pole_uncertainty`;
 left out when a level has none), ``x_fit_error`` and ``x_warning`` carry the fit
 warnings through a CSV round trip (:func:`ident.modal_data.annotation_warnings`). A
@@ -96,7 +97,9 @@ def series_table(fits) -> MeasuredData:
         raise InputError(str(exc)) from None
     if not rows:
         raise InputError("no mode identified at any level")
-    level_of = {int(k): n + 1 for n, k in enumerate(order)}
+    held = np.array([fits[int(k)].held for k in order], float)
+    same = np.r_[False, np.abs(np.diff(held)) <= 1e-9 * np.abs(held[1:])]
+    level_of = {int(k): int(v) for k, v in zip(order, np.cumsum(~same))}   # repeats share
     labels = np.array([r[2] for r in rows])
     n_levels = {lab: int(np.sum(labels == lab)) for lab in set(labels.tolist())}
     if len(fits) >= MIN_LEVELS and max(n_levels.values()) < MIN_LEVELS:

@@ -108,8 +108,9 @@ def track_modes(held, results):
 
     Parameters
     ----------
-    held : (L,) the amplitude each FRF set held (distinct, > 0): the excitation under
-        force control, the response amplitude under response control.
+    held : (L,) the amplitude each FRF set held (> 0; equal values are repeats of one
+        level): the excitation under force control, the response amplitude under
+        response control.
     results : list of L lists of IdentifiedMode.
 
     Modes are labelled 1, 2, ... at the lowest level (by frequency) and followed to the
@@ -129,10 +130,7 @@ def track_modes(held, results):
         raise ValueError("one result per excitation level is needed")
     if np.any(~np.isfinite(held) | (held <= 0)):
         raise ValueError("excitation levels must be finite and > 0")
-    order = np.argsort(held, kind="stable")
-    if np.any(np.diff(held[order]) <= 0):
-        raise ValueError("two FRF sets have the same held level: "
-                         + ", ".join(f"{e:g}" for e in held[order]))
+    order = np.argsort(held, kind="stable")     # equal held levels: repeats, file order
     rows = []
     last: dict[int, IdentifiedMode] = {}   # label -> latest mode
     next_label = 1

@@ -31,6 +31,7 @@ import re
 import numpy as np
 
 from ident.errors import InputError
+from ident.modal_data import mean_per_level
 from inverse.contradictions import iwan_contradictions
 from inverse.estimate_result import Estimate
 from inverse.fe_reference import fe_reference
@@ -139,6 +140,9 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
         raise InputError(f"confidence must be in (0, 1), got {confidence!r}")
     mode, d = _select_mode(data, mode)
     warnings = list(data.warnings)
+    d, averaged = mean_per_level(d)
+    if averaged:
+        warnings.append(averaged)
     levels = d.level
     if fit_levels is None:
         fit = list(map(int, levels))

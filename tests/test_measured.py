@@ -136,7 +136,7 @@ def test_values_outside_their_range(tmp_path, row, text, message):
 def test_duplicate_mode_level(tmp_path):
     rows = ROWS + ["3,16.0,2.5e6,0.0129"]
     p = write(tmp_path, "\n".join([HEADER] + rows) + "\n")
-    assert error_of(p) == f"{p}:7:level: duplicate (mode, level) = (1, 3)"
+    assert error_of(p) == f"{p}:7:level: duplicate (mode, level, run_order) = (1, 3, 3)"
     # the same level for two different modes is fine
     rows2 = [r + ",1" for r in ROWS] + [r + ",2" for r in ROWS]
     d = read_measured(write(tmp_path, "\n".join([HEADER + ",mode"] + rows2) + "\n", "ok.csv"))
@@ -249,3 +249,24 @@ def test_response_control_holds_the_response_amplitude(tmp_path):
 def test_response_control_rules(tmp_path, edit, column, message):
     text = error_of(write(tmp_path, edit(RESPONSE)))
     assert f":{column}:" in text and message in text, text
+
+
+def test_repeats_are_legal_rows(tmp_path):
+    """Repeats (spec measured-data.md): the same (mode, level) at another run order."""
+    rows = [r + f",{i + 1}" for i, r in enumerate(ROWS)] + ["1,0.5,2.50679e6,0.012700,6"]
+    d = read_measured(write(tmp_path, "\n".join([HEADER + ",run_order"] + rows) + "\n"))
+    one = d.for_mode(1)
+    assert list(one.level) == [1, 1, 2, 3, 4, 5] and list(one.run_order) == [1, 6, 2, 3, 4, 5]
+    # the same run order twice is still a duplicate
+    bad = rows + ["2,1.0,2.5e6,0.0128,2"]
+    p = write(tmp_path, "\n".join([HEADER + ",run_order"] + bad) + "\n", "dup.csv")
+    assert error_of(p) == f"{p}:8:level: duplicate (mode, level, run_order) = (1, 2, 2)"
+    # a repeat must still lie below the next level's excitation
+    bad = rows[:-1] + ["1,1.5,2.50679e6,0.012700,6"]
+    p = write(tmp_path, "\n".join([HEADER + ",run_order"] + bad) + "\n", "order.csv")
+    assert error_of(p) == (f"{p}:3:excitation: mode 1: excitation of level 2 (1) does not "
+                           f"exceed that of level 1 (1.5)")
+    # three distinct levels with repeats are still too few
+    few = [r + f",{i + 1}" for i, r in enumerate(ROWS[:3])] + ["3,2.0,2.5e6,0.0128,9"]
+    p = write(tmp_path, "\n".join([HEADER + ",run_order"] + few) + "\n", "few.csv")
+    assert "mode 1 has 3 levels" in error_of(p)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from cli import validate
 from cases.registry import CASES, MEASURED_DATA, fe_check
+from cli.commands.diagnose_report import noise_words
 from cli.series_options import add_series_arguments, series_from_args
 from ident.errors import InputError
 from ident.measured import read_measured
@@ -32,8 +33,9 @@ def register(subparsers) -> None:
             "frequency drop and damping growth tied by the exact kappa2/|kappa1| of "
             "chi), each cause of the catalogue (macro-slip, nonproportional-amplitude, "
             "geometric-hardening, thermal-drift, quadratic-damping) and every pair of "
-            "them, against the noise of the data (the identification's stds, else the "
-            "level-to-level scatter). Weights are Akaike weights with a cost of "
+            "them, against the noise of the data (the identification's stds plus the "
+            "test's repeatability: from repeated levels, else the scatter about a smooth "
+            "curve). Weights are Akaike weights with a cost of "
             f"{T_CAUSE:g} in AIC per cause; an explanation with at least "
             f"{W_AMBIGUOUS:.2g} of the named one's weight makes it ambiguous. "
             "Contradictions with the Iwan model are stated with numbers; when no "
@@ -140,8 +142,24 @@ def format_text(r: dict, source: str) -> str:
                      f"levels: {p['measurement']}")
     for c, why in sep["untestable"].items():
         lines.append(f"not tested: {c} ({why})")
-    n = r["noise"]
-    lines.append("noise: " + ", ".join(f"{c} from {s}" for c, s in n["source"].items()))
+    lines.append("noise (identification + repeatability): " + noise_words(r["noise"]))
+    vid = r.get("verdict_identification_only")
+    lines.append("with the identification's noise alone: " + (
+        f"{vid['cause']}" + (f" + {', '.join(vid['also'])}" if vid["also"] else "")
+        + (" (the verdict changes)" if r["verdict_changes_with_identification_only"]
+           else " (the same verdict)") if vid else f"not judged ({r['identification_only_note']})"))
+    if r["at_bound"]:
+        lines.append(f"on a bound in the {r['parameters']['model']} fit: "
+                     f"{', '.join(r['at_bound'])}")
+    fl = r["failures"]
+    lines.append(f"failures: {fl['fits']} fits, {fl['folds']} cross-validation folds, "
+                 f"{fl['held_out']} held-out fits")
+    preds = r["held_out_predictions"]["levels"]
+    if preds:
+        inside = sum(p[c]["inside"] for p in preds for c in ("omega2", "zeta"))
+        lines.append(f"held-out top levels ({r['held_out_predictions']['model']} fitted to "
+                     f"the lower ones): {inside} of {2 * len(preds)} values inside their "
+                     f"nominal 95 % prediction interval")
     lines += [f"warning: {w}" for w in r["data_warnings"]]
     if "synthetic_truth" in r:
         t = r["synthetic_truth"]

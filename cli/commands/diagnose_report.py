@@ -7,6 +7,15 @@ def _g(v, spec=".3g"):
     return "n/a" if v is None else format(v, spec)
 
 
+def noise_words(noise: dict) -> str:
+    """One line per diagnosis: each channel's total noise and where it comes from."""
+    return "; ".join(
+        (f"{c} {100 * v['total_rel']:.3g} % (identification {100 * v['identification_rel']:.2g} %"
+         f", repeatability {100 * v['repeatability_rel']:.2g} %: {v['source']})")
+        if v["relative"] else f"{c} {v['total_rel']:.3g} ({v['source']})"
+        for c, v in noise.items())
+
+
 def _evidence_rows(r: dict) -> list[str]:
     rows = []
     gains = {"+".join(a["causes"]): a["gain"] for a in r["alternatives"]}
@@ -58,7 +67,7 @@ def markdown(r: dict, source: str) -> str:
 | extended model (`{r['parameters']['model']}`) | {_g(r['extended_error'])} | {_g(r['held_out_errors']['extended'])} |
 | gain (base / extended) | {_g(r['gain'])} | {_g(r['gain_held_out'])} |
 
-Error measure: {r['error_measure']}. Noise: {', '.join(f'{c} from {s}' for c, s in n['source'].items())}.
+Error measure: {r['error_measure']}. Noise: {noise_words(n)}.
 Fit of `{ft['model']}`: rms residual {ft['rms_standardized']:.3g} noise standard
 deviations, p = {_g(ft['p_value'], '.2g')} ({ft['test']}); the data count as outside
 their noise below p = {crit['p_unexplained']:g}.

@@ -10,26 +10,20 @@ ambiguity fraction of A's weight there (``IC_B - IC_A < 2 ln(1/w)``), i.e. the
 measurement would call a just-detectable A ambiguous with B (or name B). A cause whose
 model cannot be fitted (too few data, no response column) is untestable.
 
-Signatures (typical shapes, on the base fit's chi and hysteretic stiffness):
-``macro-slip`` top slip 2 phi_max with Dirac weight beta = 1; ``nonproportional-
-amplitude`` a steady shortfall of 20 % per decade of excitation (log s -> 0.8 log s);
-``geometric-hardening`` omega2 + s^2; ``thermal-drift`` omega2 + t_run;
-``quadratic-damping`` zeta + s.
+Signatures (typical shapes, on the base fit's chi and hysteretic stiffness): each
+cause's ``signature`` in :mod:`inverse.diagnosis.causes`.
 """
 from __future__ import annotations
 
 from dataclasses import replace
 import numpy as np
 
-from inverse.diagnosis_fit import fit_model
-from inverse.diagnosis_models import CAUSES, Model, Observations, slip_shapes
-from inverse.diagnosis_params import physical_parameters
-from inverse.iwan_modal import kappa1_per_R, kappa_ratio
+from inverse.diagnosis.fit import fit_model
+from inverse.diagnosis.causes import CATALOGUE, CAUSES
+from inverse.diagnosis.models import Model, Observations
+from inverse.diagnosis.params import physical_parameters
 
 __all__ = ["signature", "separability", "separating_measurement", "SEPARATING_MEASUREMENT"]
-
-_REPEAT = ("repeat the lowest level at the end of the test (or shuffle the run order): "
-           "drift follows time, not amplitude")
 #: What measurement separates two causes (physics of their signatures).
 SEPARATING_MEASUREMENT = {
     frozenset(("macro-slip", "nonproportional-amplitude")):
@@ -55,22 +49,9 @@ SEPARATING_MEASUREMENT = {
 }
 
 
-#: What strengthens the evidence for (or against) one cause.
-MORE_EVIDENCE = {
-    "macro-slip": "add levels above the top one (macro-slip grows fast past phi_max)",
-    "nonproportional-amplitude": "measure the force reaching the structure (force "
-                                 "transducer) or run under response control",
-    "geometric-hardening": "add levels above the top one (hardening grows with amplitude "
-                           "squared or faster)",
-    "thermal-drift": _REPEAT,
-    "quadratic-damping": "add levels above the top one (the added damping grows faster "
-                         "than the Iwan power law)",
-}
-
-
 def _advice(a: str, b: str) -> str:
     if "thermal-drift" in (a, b):
-        return _REPEAT
+        return CATALOGUE["thermal-drift"].ADVICE
     return SEPARATING_MEASUREMENT.get(frozenset((a, b)), "add levels above the top one")
 
 
@@ -81,34 +62,13 @@ def separating_measurement(a: tuple, b: tuple) -> str:
     if only_a and only_b:
         return f"{only_a[0]} vs {only_b[0]}: " + _advice(only_a[0], only_b[0])
     c = (only_a or only_b)[0]
-    return f"whether {c} is there: " + MORE_EVIDENCE[c]
+    return f"whether {c} is there: " + CATALOGUE[c].ADVICE
 
 
 def signature(cause: str, obs: Observations, base_params: dict):
     """Change of (omega2, zeta, log response) at every level that ``cause`` adds to
-    the base fit (module doc), in the channels' units, unscaled."""
-    s, w2, p = obs.s, obs.omega2, base_params["chi"] + 1.0
-    chi = p - 1.0
-    K1 = max(base_params["kappa1_B"] * s[0] ** -p,
-             2.0 * base_params["omega2_0"] * float(np.ptp(obs.zeta)), 1e-300)
-    zero = np.zeros(obs.n)
-    if cause == "geometric-hardening":
-        return s**2, zero, zero
-    if cause == "thermal-drift":
-        return np.asarray(obs.t_run, float), zero, zero
-    if cause == "quadratic-damping":
-        return zero, s, zero
-    if cause == "nonproportional-amplitude":
-        ds = s ** (0.8 * p) - s**p
-        return -kappa_ratio(chi, "exact") * K1 * ds, 0.5 * K1 * ds / w2, -0.2 * np.log(s)
-    x_top, beta = 2.0, 1.0                                           # macro-slip
-    U = K1 / (kappa1_per_R(chi) * x_top**p)
-    x = x_top * s
-    P1, P2, Q1, Q2 = slip_shapes(x, chi)
-    P1m = kappa1_per_R(chi) * x**p
-    S = beta * U / p
-    d_om = -(U * (P2 - kappa_ratio(chi, "exact") * P1m) + S * Q2)
-    return d_om, 0.5 * (U * (P1 - P1m) + S * Q1) / w2, zero
+    the base fit (its file's ``signature``), in the channels' units, unscaled."""
+    return CATALOGUE[cause].signature(obs, base_params)
 
 
 def _with_data(obs, omega2, zeta, log_r):
@@ -136,7 +96,7 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
                                       "the criterion is undefined")
             else:
                 singles.append(m.causes[0])
-    bp = physical_parameters(base, obs, 1.0)
+    bp = physical_parameters(base, obs)
     n = obs.n
     pred = [v - base.residual[i * n:(i + 1) * n] * obs.sigma[ch]
             for i, (ch, v) in enumerate(zip(obs.channels, (obs.omega2, obs.zeta, obs.log_r)))]

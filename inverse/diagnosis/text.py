@@ -6,25 +6,9 @@ import math
 import numpy as np
 
 from inverse.contradictions import Z_STATE, Contradiction
+from inverse.diagnosis.causes import CATALOGUE
 
-__all__ = ["own_contradictions", "chi_at_bound", "describe", "CAUSE_WORDS"]
-
-#: One sentence per cause: what it does to the data.
-CAUSE_WORDS = {
-    "macro-slip": "the joint leaves micro-slip at the top levels (slip past phi_max): "
-                  "the frequency drop and the damping growth bend away from the power law",
-    "nonproportional-amplitude": "the joint amplitude does not grow in proportion to the "
-                                 "excitation (the force reaching the structure falls short "
-                                 "of the held level)",
-    "geometric-hardening": "a hardening stiffness lifts the natural frequency with "
-                           "amplitude against the Iwan softening; the damping is unaffected",
-    "thermal-drift": "the natural frequency drifts with the order in which the levels were "
-                     "run, not with amplitude; the damping is unaffected",
-    "quadratic-damping": "an extra amplitude-dependent damping without softening (air, "
-                         "viscoelastic, material) makes the damping grow faster than the "
-                         "Iwan tie to the frequency drop allows",
-}
-
+__all__ = ["own_contradictions", "chi_at_bound", "describe"]
 
 def own_contradictions(d, base_params: dict, base_zeta, noise) -> list:
     """The diagnosis's own statements: the base fit collapsing to no joint while the
@@ -102,7 +86,7 @@ def describe(cause: str, also: list, params: dict, gain, test: dict, contradicti
                     f"(rms residual {test['rms_standardized']:.2f} noise standard "
                     f"deviations): no extension earned its extra parameters.")
     else:
-        words = "; ".join(CAUSE_WORDS[c] for c in [cause, *also])
+        words = "; ".join(CATALOGUE[c].WORDS for c in [cause, *also])
         gain_text = (f"cuts the leave-one-level-out prediction error by a factor {g}"
                      if gain is not None else "has too many parameters for a "
                      "leave-one-level-out error on these levels")

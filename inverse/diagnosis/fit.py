@@ -1,7 +1,7 @@
-"""Weighted least-squares fits of the diagnosis models (:mod:`inverse.diagnosis_models`).
+"""Weighted least-squares fits of the diagnosis models (:mod:`inverse.diagnosis.models`).
 
 The noise level of every channel and level is known when a model is fitted (from the
-identification's stds or estimated beforehand: :mod:`inverse.diagnosis_noise`), so the
+identification's stds or estimated beforehand: :mod:`inverse.diagnosis.noise`), so the
 Gaussian log-likelihood is ``-chi2/2`` up to a constant shared by every model, with
 ``chi2`` the sum of squared standardized residuals. For each point of the nonlinear
 parameters the linear ones are solved exactly (variable projection), non-negative
@@ -10,7 +10,9 @@ constraint set), for a whole batch of points at once (normal equations with one 
 of refinement, Bjorck 1987). The nonlinear parameters are searched on a grid (global
 in chi and in every extension's shape) and refined by Levenberg-Marquardt steps whose
 Jacobian and trial steps are one batched evaluation each. A refit on a subset of the
-levels (cross-validation) starts from the fit to all levels.
+levels (cross-validation) starts from the same starting points as the fit to all
+levels (the grid points and extra starts it refined), never from its optimum, which
+saw the left-out level.
 
 Information criteria (``k`` model parameters, ``N`` data in the fit; the noise levels
 are not fitted): ``AIC = chi2 + 2k``, defined when ``N > k``. With known noise levels
@@ -25,10 +27,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from inverse.diagnosis_models import Model, Observations, design
+from inverse.diagnosis.models import Model, Observations, design
 
 __all__ = ["Fit", "solve_nonneg", "evaluate", "refine", "fit_model", "fit_folds",
-           "information_criteria"]
+           "profile_interval", "information_criteria"]
 
 
 @dataclass
@@ -52,6 +54,12 @@ class Fit:
     aicc: float | None
     bic: float
     parameters: dict = field(default_factory=dict)
+    starts: np.ndarray | None = None
+
+    @property
+    def failed(self) -> bool:
+        """The fit did not give a finite chi2 (no usable start)."""
+        return not np.isfinite(self.chi2)
 
     @property
     def chi(self) -> float:
@@ -136,14 +144,15 @@ def _rss(model, obs, theta, rows, chunk=4096):
 _LAMBDAS = np.array([1e-3, 1e-2, 1e-1, 1.0, 10.0])
 
 
-def refine(model, obs, theta, rows, iters):
+def refine(model, obs, theta, rows, iters, fixed=None):
     """Levenberg-Marquardt on the nonlinear parameters of ``B`` independent problems at
     once (starts, or cross-validation folds): ``theta`` (B, d), ``rows`` (B, N) bool.
 
     Box bounds by clipping. Each iteration is two batched evaluations: the forward-
     difference Jacobians of every problem, then five trial steps each (damping 1e-3 ...
     10 times the diagonal of J^T J); a problem stops when no trial lowers its chi2.
-    Returns the refined theta (B, d)."""
+    ``fixed`` (d,) bool: coordinates held at their start (a profile). Returns the
+    refined theta (B, d)."""
     lo, hi = _bounds(model)
     theta = np.array(theta, float)
     B, d = theta.shape
@@ -165,6 +174,8 @@ def refine(model, obs, theta, rows, iters):
         _, rj, _ = evaluate(model, obs, pts, np.repeat(m, d, axis=0))
         rj = rj.reshape(idx.size, d, -1) * wgt[idx][:, None, :]
         J = (rj - rw[:, None, :]) / step[:, :, None]                    # (b, d, N)
+        if fixed is not None:
+            J[:, np.asarray(fixed, bool), :] = 0.0
         JtJ = np.einsum("bdn,ben->bde", J, J)
         g = np.einsum("bdn,bn->bd", J, rw)
         diag = np.maximum(np.einsum("bdd->bd", JtJ),
@@ -191,28 +202,31 @@ def refine(model, obs, theta, rows, iters):
     return theta
 
 
-def _finish(model, obs, cands, train):
-    """The best of the candidate thetas on ``train`` as a :class:`Fit`."""
+def _finish(model, obs, cands, train, starts=None):
+    """The best of the candidate thetas on ``train`` as a :class:`Fit` (chi2 inf when
+    no candidate gives a finite one: a failed fit)."""
     rows = np.tile(train, len(obs.channels))
     x, r, log_s = evaluate(model, obs, cands, rows)
     f = np.sum(r[:, rows] ** 2, axis=1)
     i = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
     k = model.n_params(obs.log_r is not None)
     n = int(rows.sum())
-    aic, aicc, bic = information_criteria(float(f[i]), k, n)
+    chi2 = float(f[i]) if np.isfinite(f[i]) else float("inf")
+    aic, aicc, bic = information_criteria(chi2, k, n)
     return Fit(model=model, theta=cands[i], linear=x[i], residual=r[i], log_s=log_s[i],
-               train=train, chi2=float(f[i]), n_data=n, n_params=k, aic=aic, aicc=aicc,
-               bic=bic)
+               train=train, chi2=chi2, n_data=n, n_params=k, aic=aic, aicc=aicc,
+               bic=bic, starts=starts)
 
 
 def fit_model(model: Model, obs: Observations, train=None, start=None, iters: int = 25,
               n_starts: int = 3, extra_starts=None) -> Fit:
-    """Fit ``model`` to the levels ``train`` (default: all).
+    """Fit ``model`` to the levels ``train`` (bool per row; default: all).
 
     Without ``start``: grid search over the nonlinear parameters, then refinement from
     the ``n_starts`` best grid points that are not neighbours, and from every theta of
     ``extra_starts`` (a pair of causes also starts from the fits of each cause alone).
-    With ``start`` (a theta, e.g. the fit to all levels): refinement from there only.
+    With ``start`` (a theta or several): refinement from there only. The starts are
+    kept (``Fit.starts``) for the cross-validation folds.
     """
     train = np.ones(obs.n, bool) if train is None else np.asarray(train, bool)
     rows = np.tile(train, len(obs.channels))
@@ -234,14 +248,44 @@ def fit_model(model: Model, obs: Observations, train=None, start=None, iters: in
     else:
         theta0 = np.atleast_2d(np.asarray(start, float))
     cands = refine(model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), iters)
-    return _finish(model, obs, cands, train)
+    return _finish(model, obs, cands, train, theta0)
 
 
-def fit_folds(full: Fit, obs: Observations, trains, iters: int = 6) -> list:
-    """Refits of ``full``'s model to each training set of ``trains`` (F, n) bool, all
-    refined together from ``full.theta``. Returns a list of :class:`Fit`."""
+def fit_folds(full: Fit, obs: Observations, trains, iters: int = 12) -> list:
+    """Refits of ``full``'s model to each training set of ``trains`` (F, n) bool, every
+    fold refined from each of ``full.starts`` (the starting points of the fit to all
+    levels, not its optimum). Returns a list of :class:`Fit` (``failed`` when no start
+    gave a finite chi2)."""
     trains = np.asarray(trains, bool)
-    rows = np.tile(trains, (1, len(obs.channels)))
-    start = np.repeat(full.theta[None], trains.shape[0], axis=0)
-    th = refine(full.model, obs, start, rows, iters)
-    return [_finish(full.model, obs, th[i:i + 1], trains[i]) for i in range(trains.shape[0])]
+    starts = full.starts if full.starts is not None else full.theta[None]
+    S, F = starts.shape[0], trains.shape[0]
+    rows = np.repeat(np.tile(trains, (1, len(obs.channels))), S, axis=0)
+    th = refine(full.model, obs, np.tile(starts, (F, 1)), rows, iters)
+    return [_finish(full.model, obs, th[i * S:(i + 1) * S], trains[i]) for i in range(F)]
+
+
+def profile_interval(fit: Fit, obs: Observations, j: int, threshold: float,
+                     n_points: int = 13):
+    """Profile interval of nonlinear parameter ``j`` of ``fit``: the range of values on
+    a grid over its box (plus the fitted value) where the chi2 minimized over the other
+    nonlinear parameters (from the fit's starts and its optimum) stays within
+    ``threshold`` of the fit's chi2 (3.84: 95 % for one parameter, Wilks). Returns
+    ``((lower, upper), failures)``; the interval reaches a bound when the bound is
+    inside it."""
+    _, lo, hi, _ = fit.model.nonlinear[j]
+    values = np.unique(np.r_[np.linspace(lo, hi, n_points), fit.theta[j]])
+    starts = np.vstack([fit.theta[None], fit.starts]) if fit.starts is not None \
+        else fit.theta[None]
+    S = starts.shape[0]
+    theta0 = np.repeat(starts, values.size, axis=0)
+    theta0[:, j] = np.tile(values, S)
+    rows = np.tile(fit.train, len(obs.channels))
+    fixed = np.zeros(theta0.shape[1], bool)
+    fixed[j] = True
+    th = refine(fit.model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), 15, fixed)
+    _, r, _ = evaluate(fit.model, obs, th, rows)
+    chi2 = np.sum(r[:, rows] ** 2, axis=1).reshape(S, values.size)
+    chi2 = np.where(np.isfinite(chi2), chi2, np.inf).min(axis=0)
+    failures = int(np.sum(~np.isfinite(chi2)))
+    inside = values[chi2 - min(fit.chi2, chi2.min()) <= threshold]
+    return (float(inside.min()), float(inside.max())), failures

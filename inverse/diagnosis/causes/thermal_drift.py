@@ -1,0 +1,58 @@
+"""Cause ``thermal-drift``: the natural frequency drifts with time (``run_order``), not
+with amplitude; the damping is unaffected.
+
+One-mode model: ``omega2 += d f(t_v)``, ``t_v`` the run order scaled to [0, 1],
+``f = (1 - e^(-b t))/(1 - e^(-b))``: an exponential approach to a new temperature
+(Newton's law of cooling), linear at ``b = 0``, accelerating for ``b < 0``. Not testable
+on a monotone run order (time and amplitude are then one variable).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+ID = "thermal-drift"
+ORDER = 40
+WORDS = ("the natural frequency drifts with the order in which the levels were run, not "
+         "with amplitude; the damping is unaffected")
+ADVICE = ("repeat the lowest level at the end of the test (or shuffle the run order): "
+          "drift follows time, not amplitude")
+NONLINEAR = [("b_drift", -4.0, 8.0, np.array([-2.0, 0.0, 2.0, 5.0]))]
+LINEAR = ["d"]
+NONNEG = ()
+EFFECT = None
+#: Slot for the FE realization (filled by the FE level).
+FE_REALIZATION = None
+
+
+def drift_shape(t, b):
+    """``(1 - exp(-b t)) / (1 - exp(-b))`` (``t`` at ``b = 0``), broadcast; ``t`` in [0, 1]."""
+    small = np.abs(b) < 1e-6
+    bb = np.where(small, 1.0, b)
+    return np.where(small, t * (1 + 0.5 * b * (1 - t)), np.expm1(-bb * t) / np.expm1(-bb))
+
+
+def columns(obs, col, log_s, p, w2):
+    """Column of ``d`` (module doc)."""
+    return [drift_shape(obs.t_run[None, :], col["b_drift"])], [np.zeros_like(log_s)]
+
+
+def parameters(lin, nl, obs, log_s, chi):
+    """``d_total`` (omega2 drift over the run, rad^2/s^2), ``d`` per run (average) and
+    the shape ``b_drift``."""
+    span = obs.run_span
+    return {"d_total": lin["d"], "d": lin["d"] / span if span > 0 else 0.0,
+            "b_drift": nl["b_drift"]}
+
+
+def signature(obs, base):
+    """omega2 + t_run."""
+    z = np.zeros(obs.n)
+    return np.asarray(obs.t_run, float), z, z
+
+
+def testable(obs):
+    """Not on a monotone run order."""
+    if obs.run_monotone:
+        return False, ("the levels were run in order of amplitude: a drift with time "
+                       "cannot be told from an amplitude effect")
+    return True, None

@@ -1,0 +1,217 @@
+"""The JSON object of a diagnosis (``shared/spec/diagnosis.md`` v2), from the pieces
+:func:`inverse.diagnose.diagnose` computed.
+
+Keys: ``cause``, ``also``, ``alternatives``, ``ambiguous`` (+ ``ambiguity``: who ties
+and what measurement separates them), ``contradictions`` (plain strings) and
+``contradiction_details``, ``parameters`` (model, chi, ...; fitted), ``base_parameters``,
+``base_error``, ``extended_error``, ``gain``, ``gain_held_out``, ``error_measure``,
+``evidence`` (per candidate), ``fit_test`` (the named or closest model against the
+noise), ``noise`` (per channel: source, identification and repeatability parts, dof),
+``verdict_identification_only`` (the verdict with the identification's noise alone),
+``closest_miss`` (when ``unexplained``), ``parameter_bounds`` (every fitted parameter of
+the named model with ``at_bound``), ``at_bound`` (names), ``held_out_predictions``,
+``failures``, ``untestable``, ``separability``, ``data_warnings``, ``summary``,
+``mode``, ``control``, ``levels`` (data, fits and residuals per row, for the plots).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from inverse.diagnosis.separability import separating_measurement
+from inverse.diagnosis.text import describe
+from inverse.judge import P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Bounded, at_bound
+
+__all__ = ["assemble", "ERROR_MEASURE"]
+
+ERROR_MEASURE = ("rms standardized prediction error ((data - prediction) / noise level) "
+                 "over the levels left out of the fit and every channel (omega2, zeta, "
+                 "log response amplitude when present); gain: leave one interior level "
+                 "out; gain_held_out: fit the lower levels, predict the top {top}")
+
+
+def _ratio(a, b):
+    return None if a is None or b is None or b <= 0 else float(a / b)
+
+
+def _predictions(fit, obs):
+    """Fitted values in data units (omega2, zeta, response amplitude or None)."""
+    n = obs.n
+    out = []
+    for i, (ch, v) in enumerate(zip(obs.channels, (obs.omega2, obs.zeta, obs.log_r))):
+        out.append(v - fit.residual[i * n:(i + 1) * n] * obs.sigma[ch])
+    resp = np.exp(out[2] + np.log(obs.s)) if obs.log_r is not None else None
+    return out[0], out[1], resp
+
+
+def _evidence(fits, unavailable, sel):
+    none = fits["none"]
+    ev = {}
+    for name, reason in unavailable.items():
+        ev[name] = {"causes": name.split("+"), "available": False, "reason": reason,
+                    "weight": 0.0}
+    for name, f in fits.items():
+        e = {"causes": list(f.model.causes) or ["none"], "available": True,
+             "chi2": f.chi2, "n_params": f.n_params, "n_data": f.n_data, "aic": f.aic,
+             "aicc": f.aicc, "bic": f.bic, "delta_bic": none.bic - f.bic,
+             "weight": sel.weights[name], "p_value": sel.tests[name].p_value,
+             "eligible": name in sel.eligible, "why_not": sel.why_not.get(name)}
+        e["delta_aicc"] = (None if f.aicc is None or none.aicc is None
+                           else none.aicc - f.aicc)
+        if f.aic is None:
+            e["delta_aic"] = None
+            e["reason"] = (f"cannot be fitted: {f.n_data} data for {f.n_params} "
+                           f"parameters")
+        elif none.aic is None:
+            e["delta_aic"] = None
+            e["reason"] = "the base model cannot be fitted (too few data)"
+        else:
+            e["delta_aic"] = none.aic - f.aic
+        ev[name] = e
+    return ev
+
+
+def parameter_bounds(fit, obs, profiles=None, rtol: float = 1e-3) -> dict:
+    """Every fitted parameter of ``fit`` as :class:`inverse.judge.Bounded` JSON: the
+    nonlinear ones with their box (``p`` reported as ``chi = p - 1``) and, for those on
+    a bound, the profile interval of ``profiles`` (``{index: (lo, hi)}``); the linear
+    ones with ``[0, inf)`` when non-negative, else unbounded."""
+    out = {}
+    profiles = profiles or {}
+    for j, (v, (name, lo, hi, _)) in enumerate(zip(fit.theta, fit.model.nonlinear)):
+        shift = -1.0 if name == "p" else 0.0
+        on, which = at_bound(v, lo, hi, rtol)
+        iv = profiles.get(j)
+        out["chi" if name == "p" else name] = Bounded(
+            "chi" if name == "p" else name, float(v + shift), lo + shift, hi + shift,
+            on, which, None if iv is None else (iv[0] + shift, iv[1] + shift),
+            None if iv is None else "profile (95 %)").to_json()
+    nonneg = fit.model.nonneg(obs.log_r is not None)
+    for j, (name, x) in enumerate(zip(fit.model.linear_names(obs.log_r is not None),
+                                      fit.linear)):
+        lo = 0.0 if j in nonneg else -np.inf
+        on = bool(j in nonneg and x <= 0.0)
+        out[name] = Bounded(name, float(x), lo, np.inf, on, "lower" if on else None).to_json()
+    return out
+
+
+def _verdict_json(sel):
+    if sel is None:
+        return None
+    return {"cause": sel.cause, "also": sel.also, "model": sel.best,
+            "fit_test": sel.tests[sel.best].to_json()}
+
+
+def _failures(fits, cv, held, profile_failures):
+    fits_failed = [k for k, f in fits.items() if f.failed]
+    folds = {k: v[3] for k, v in cv.items() if v[3]}
+    held_failed = [k for k, v in held.items() if v[2] is not None and v[2].failed]
+    return {"fits": len(fits_failed), "folds": sum(folds.values()),
+            "held_out": len(held_failed), "profile_points": profile_failures,
+            "total": len(fits_failed) + sum(folds.values()) + len(held_failed)
+            + profile_failures, "failed_fits": fits_failed, "failed_folds": folds}
+
+
+def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise,
+             unavailable, untestable, contradictions, refuted, separability, warnings,
+             predictions, selection_id_only, why_id_only, profiles,
+             profile_failures) -> dict:
+    """The diagnosis as one JSON-ready dict (module doc)."""
+    sel = selection
+    cause, also, best, rivals = sel.cause, sel.also, sel.best, sel.rivals
+    base_err = cv["none"][0]
+    alternatives = []
+    for name, f in fits.items():
+        err = cv[name][0]
+        alternatives.append({
+            "causes": list(f.model.causes) or ["none"], "weight": sel.weights[name],
+            "gain": _ratio(base_err, err) if name != "none" else 1.0,
+            "within_noise": sel.tests[name].passes(),
+            "refuted": bool(refuted and name == "none")})
+    alternatives.sort(key=lambda a: -a["weight"])
+    ext = fits[best]
+    ext_err = cv[best][0]
+    held_base, held_ext = held["none"][0], held[best][0]
+    ambiguity = None
+    if rivals:
+        ambiguity = {"between": [best] + rivals,
+                     "weights": [sel.weights[best]] + [sel.weights[r] for r in rivals],
+                     "measurement": [separating_measurement(ext.model.causes,
+                                                            fits[r].model.causes)
+                                     for r in rivals]}
+    named_gain = _ratio(base_err, ext_err)
+    bo, bz, br = _predictions(fits["none"], obs)
+    eo, ez, er = _predictions(ext, obs)
+    n = obs.n
+    ch = len(obs.channels)
+    stdres = lambda f: f.residual.reshape(ch, n).T  # noqa: E731
+    unfit = [k for k, f in fits.items() if f.aic is None]
+    bounds = parameter_bounds(ext, obs, profiles)
+    on_bound = [k for k, b in bounds.items() if b["at_bound"]]
+    values = {"omega2": obs.omega2, "zeta": obs.zeta, "response": obs.log_r}
+    noise_json = noise.to_json(values)
+    id_only = _verdict_json(selection_id_only)
+    changes = None if id_only is None else (id_only["cause"], id_only["also"]) != (cause, also)
+    summary = describe(cause, also, params[best], named_gain, sel.tests[best].to_json(),
+                       contradictions, best, rivals, np.unique(obs.levels).size,
+                       separability["inseparable"], unfit)
+    summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
+    if on_bound:
+        summary += (f" On a bound in the {best} fit: {', '.join(on_bound)} (held there: "
+                    f"not treated as free in the prediction intervals).")
+    return {
+        "cause": cause, "also": also, "mode": int(d.mode[0]),
+        "control": "response" if obs.response_controlled else "force",
+        "alternatives": alternatives, "ambiguous": bool(rivals), "ambiguity": ambiguity,
+        "unexplained": sel.unexplained, "closest_miss": sel.closest_miss,
+        "contradictions": [c.statement for c in contradictions],
+        "contradiction_details": [{"kind": c.kind, **c.numbers} for c in contradictions],
+        "parameters": dict(params[best], model=best),
+        "parameter_bounds": bounds, "at_bound": on_bound,
+        "base_parameters": params["none"],
+        "base_error": base_err, "extended_error": ext_err, "gain": named_gain,
+        "cv_note": cv["none"][2] or cv[best][2],
+        "gain_held_out": _ratio(held_base, held_ext),
+        "held_out_errors": {"base": held_base, "extended": held_ext,
+                            "note": held["none"][1] or held[best][1]},
+        "held_out_predictions": {"model": best, "levels": predictions,
+                                 "interval": "nominal 95 % prediction interval (fit "
+                                             "uncertainty of the free parameters plus "
+                                             "the noise model)"},
+        "error_measure": ERROR_MEASURE.format(top=n_top),
+        "evidence": _evidence(fits, unavailable, sel),
+        "criterion": {"t_cause": T_CAUSE, "w_ambiguous": W_AMBIGUOUS,
+                      "p_unexplained": P_UNEXPLAINED, "gain_min": 1.0},
+        "fit_test": dict(sel.tests[best].to_json(), model=best),
+        "noise": noise_json,
+        "verdict_identification_only": id_only,
+        "verdict_changes_with_identification_only": changes,
+        "identification_only_note": why_id_only,
+        "failures": _failures(fits, cv, held, profile_failures),
+        "untestable": untestable,
+        "separability": separability,
+        "summary": summary,
+        "data_warnings": warnings,
+        "levels": {
+            "level": obs.levels, "abscissa": raw, "s": obs.s, "run_order": d.run_order,
+            "omega2": obs.omega2, "zeta": obs.zeta,
+            "response_amplitude": d.response_amplitude,
+            "base_omega2": bo, "base_zeta": bz, "base_response": br,
+            "extended_omega2": eo, "extended_zeta": ez, "extended_response": er,
+            "base_residual": stdres(fits["none"]), "extended_residual": stdres(ext),
+            "base_cv_residual": cv["none"][1], "extended_cv_residual": cv[best][1],
+            "channels": obs.channels},
+    }
+
+
+def _noise_sentence(noise_json, id_only, changes, why) -> str:
+    parts = [f"{c} {100 * v['total_rel']:.3g} % ({v['source']})" if v["relative"]
+             else f"{c} {v['total_rel']:.3g} ({v['source']})" for c, v in noise_json.items()]
+    text = " Judged against the noise: " + "; ".join(parts) + "."
+    if id_only is None:
+        return text + f" With the identification's noise alone: not judged ({why})."
+    if changes:
+        return text + (f" With the identification's noise alone the verdict would be "
+                       f"{id_only['cause']}" + (f" + {', '.join(id_only['also'])}"
+                                                 if id_only["also"] else "")
+                       + ": it follows from the repeatability.")
+    return text + " The verdict is the same with the identification's noise alone."

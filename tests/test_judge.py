@@ -1,0 +1,132 @@
+"""The one judge (inverse.judge) against independent truth: planted seeded noise."""
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from inverse.judge import (Candidate, at_bound, fit_test, noise_model, pooled_repeats,
+                           select, smooth_scatter)
+
+
+def test_pooled_repeats_recover_planted_sd():
+    rng = np.random.default_rng(11)
+    sd = 3e-2
+    groups = np.repeat(np.arange(40), 3)
+    y = np.repeat(rng.uniform(1e-3, 5e-3, 40), 3) * (1 + sd * rng.standard_normal(120))
+    s, dof = pooled_repeats(groups, y)
+    assert dof == 80
+    # 99.9 % band of the chi-square(80) estimate
+    lo, hi = (math.sqrt(stats.chi2.ppf(q, 80) / 80) for q in (5e-4, 1 - 5e-4))
+    assert lo * sd < s < hi * sd
+
+
+def test_smooth_scatter_is_blind_to_power_laws_and_finds_the_noise():
+    x = np.log(np.geomspace(0.01, 1.0, 9))
+    s = np.exp(x)
+    assert smooth_scatter(x, 3 + 2 * x + 0.5 * s ** (1 / 3) - s)[0] < 1e-12
+    # an Iwan-like power law outside the basis: below 1e-3 of its range at ratio 1.8
+    for p in (0.15, 0.55, 0.9):
+        assert smooth_scatter(x, 1 - 0.01 * s**p)[0] < 1e-3 * 0.01
+    rng = np.random.default_rng(3)
+    est = [smooth_scatter(x, 3 + x + 0.01 * rng.standard_normal(9))
+           for _ in range(3000)]
+    assert {e[1] for e in est} == {4}
+    assert np.mean([e[0] ** 2 for e in est]) == pytest.approx(1e-4, rel=0.05)   # unbiased
+    # with a run order, a quadratic drift in time is not scatter (2 dof fewer)
+    t = np.array([3, 7, 1, 9, 5, 2, 8, 4, 6, 10, 11])
+    x11 = np.log(np.geomspace(0.01, 1.0, 11))
+    sd, dof = smooth_scatter(x11, 1 - 0.01 * np.exp(x11) + 1e-3 * t + 1e-4 * t**2, t)
+    assert dof == 4 and sd < 1e-12
+    # too few levels for the curve: local quadratic contrasts, one dof per window
+    assert smooth_scatter(x[:6], 3 + 2 * x[:6] - 0.7 * x[:6] ** 2) == (
+        pytest.approx(0.0, abs=1e-12), 3)
+
+
+def test_noise_model_from_repeats_splits_identification_and_repeatability():
+    rng = np.random.default_rng(5)
+    lv = np.repeat(np.arange(1, 7), 3)
+    exc = np.geomspace(1, 10, 6)[lv - 1]
+    w2 = 4e6 * (1 - 0.01 * (exc / 10) ** 0.5)
+    rep_rel, id_rel = 1e-3, 1e-4
+    omega2 = w2 * (1 + rep_rel * rng.standard_normal(18) + id_rel * rng.standard_normal(18))
+    zeta = np.full(18, 0.01) * (1 + 0.03 * rng.standard_normal(18))
+    nm = noise_model(exc, {"omega2": omega2, "zeta": zeta},
+                     {"omega2": id_rel * omega2, "zeta": None}, lv, np.arange(18))
+    assert nm.dof["omega2"] == 12 and nm.kind["omega2"] == "repeats"
+    assert "repeats of 6 levels (12 dof)" == nm.source["omega2"]
+    lo, hi = (math.sqrt(stats.chi2.ppf(q, 12) / 12) for q in (5e-4, 1 - 5e-4))
+    tot = np.median(nm.total["omega2"] / omega2)
+    assert lo * math.hypot(rep_rel, id_rel) < tot < hi * math.hypot(rep_rel, id_rel)
+    assert np.allclose(nm.identification["omega2"], id_rel * omega2)
+    only = nm.identification_only()
+    assert np.all(only.repeatability["omega2"] == 0) and math.isinf(only.dof["zeta"])
+    assert np.allclose(only.total["omega2"], id_rel * omega2)
+    js = nm.to_json({"omega2": omega2, "zeta": zeta})
+    assert js["zeta"]["identification_rel"] == 0.0 and js["zeta"]["dof"] == 12
+
+
+def test_f_test_p_value_is_uniform_under_the_null():
+    """Line fitted to level means, noise estimated from repeats: chi2/dof ~ F exactly."""
+    rng = np.random.default_rng(2024)
+    G, reps, sd = 8, 2, 0.3
+    x = np.linspace(0.0, 1.0, G)
+    lv = np.repeat(np.arange(G), reps)
+    ps = []
+    for _ in range(400):
+        y = (1.0 + 2.0 * x)[lv] + sd * rng.standard_normal(G * reps)
+        nm = noise_model(np.exp(x[lv]), {"y": y}, {"y": None}, lv)
+        s = nm.total["y"][0]
+        means = y.reshape(G, reps).mean(1)
+        coef = np.polyfit(x, means, 1)
+        chi2 = float(np.sum(reps * (means - np.polyval(coef, x)) ** 2) / s**2)
+        t = fit_test(chi2, G, 2, nm)
+        assert t.denominator_dof == G * (reps - 1)
+        ps.append(t.p_value)
+    assert stats.kstest(ps, "uniform").pvalue > 0.01
+
+
+def test_chi_square_with_known_noise():
+    nm = noise_model(np.arange(1.0, 7.0), {"omega2": np.full(6, 1e6)},
+                     {"omega2": np.full(6, 10.0)}, np.arange(6))
+    assert nm.source["omega2"].startswith("identification only")
+    t = fit_test(12.0, 6, 2, nm)
+    assert t.p_value == pytest.approx(stats.chi2.sf(12.0, 4))
+    assert "chi-square" in t.test
+    assert fit_test(1.0, 2, 2, nm).p_value is None
+
+
+def test_select_names_a_cause_only_within_noise_and_with_a_gain():
+    nm = noise_model(np.arange(1.0, 11.0), {"omega2": np.full(10, 1e6)},
+                     {"omega2": np.full(10, 10.0)}, np.arange(10))
+    base = Candidate((), 3, 40.0, 10)
+    a = Candidate(("macro-slip",), 4, 5.0, 10, gain=2.0)
+    s = select([base, a], nm)
+    assert s.cause == "macro-slip" and not s.unexplained and s.eligible == ["macro-slip"]
+    # the same fit with failed folds: a gain that is None cannot be named
+    s = select([base, Candidate(("macro-slip",), 4, 5.0, 10, gain=None, failures=2)], nm)
+    assert s.unexplained and "failed folds" in s.why_not["macro-slip"]
+    # the base model within noise, the extension no better on held-out levels
+    s = select([Candidate((), 3, 6.0, 10), Candidate(("x",), 4, 1.0, 10, gain=0.9)], nm)
+    assert s.cause == "none" and "gain" in s.why_not["x"]
+    s = select([Candidate((), 3, 80.0, 10), Candidate(("x",), 4, 60.0, 10, gain=3.0)], nm)
+    assert s.unexplained and s.closest_miss["candidate"] == "x"
+    assert s.weights["x"] > 0.99 * (1 - s.weights["none"])
+
+
+def test_pair_order_and_ambiguity():
+    nm = noise_model(np.arange(1.0, 13.0), {"omega2": np.full(12, 1e6)},
+                     {"omega2": np.full(12, 10.0)}, np.arange(12))
+    c = [Candidate((), 2, 90.0, 12), Candidate(("a",), 3, 40.0, 12, gain=1.5),
+         Candidate(("b",), 3, 30.0, 12, gain=1.5),
+         Candidate(("a", "b"), 4, 5.0, 12, gain=3.0)]
+    s = select(c, nm)
+    assert (s.cause, s.also) == ("b", ["a"]) and not s.ambiguous
+    c.append(Candidate(("c",), 3, 3.0 + 2 + 6, 12, gain=2.0))
+    assert select(c, nm).ambiguous
+
+
+def test_at_bound():
+    assert at_bound(-0.005, -0.995, -0.005) == (True, "upper")
+    assert at_bound(0.3, 0.0, 1.0) == (False, None)
+    assert at_bound(0.0, 0.0, np.inf) == (True, "lower")
