@@ -154,7 +154,7 @@ def coverage(results):
             continue
         seen = True
         if isinstance(preds, dict):
-            preds = preds.get("predictions", preds.get("rows", []))
+            preds = preds.get("levels", preds.get("predictions", preds.get("rows", [])))
         flat = [c for item in preds or [] for c in
                 [item] + [v for v in item.values() if isinstance(v, dict)]]
         for p in flat:
