@@ -20,7 +20,7 @@ from cases.synthetic_series import mechanisms as mx
 from cases.synthetic_series.first_harmonic import SliderBank
 from cases.synthetic_series.rig import Structure, resonance
 
-__all__ = ["Plan", "TooLarge", "draw_structure", "draw_plan", "add_mechanism",
+__all__ = ["Plan", "TooLarge", "draw_structure", "draw_plan", "draw_exciter", "add_mechanism",
            "predicted_visibility", "logu"]
 
 VIS_TARGET = (5.0, 40.0)
@@ -134,7 +134,7 @@ def draw_plan(rng, st, n, control, x_top, timed, rep_on, n_repeats, force_excite
         _, w2, zeta, _ = resonance(st, "response", x_top, nominal)
         if force_exciter is not None:
             st.exciter = force_exciter
-        g = st.exciter.nominal_gain(st.omega0) if hasattr(st.exciter, "nominal_gain") else st.exciter.g
+        g = st.exciter.nominal_gain(st.omega0)
         plan.held = x_top * 2 * zeta * w2 / g * rel          # the top level reaches ~x_top
         if isinstance(st.exciter, mx.AmplifierClipping):     # knee relative to the top
             st.exciter.v_s *= float(plan.held[-1])
@@ -218,12 +218,8 @@ def add_mechanism(rng, family, st, plan, x_top, truth, edge=None):
         k = int(rng.integers(max(1, len(ts) // 3), max(2, (2 * len(ts)) // 3 + 1)))
         m = mx.BoltLoosening(t_step=0.5 * (ts[k - 1] + ts[k]), kt_share=rng.uniform(0.1, 0.5))
         nominal, upper = 0.05, 0.7
-    elif family == "shaker-impedance":
-        m = st.exciter
-        size = False
-    elif family == "amplifier-clipping":
-        m = st.exciter
-        size = False
+    elif family in ("shaker-impedance", "amplifier-clipping"):
+        m, size = st.exciter, False          # drawn with the plan (draw_exciter)
     else:
         raise ValueError(f"unknown family {family!r}")
     if m is not st.exciter:

@@ -88,8 +88,7 @@ def _attempt(rng, causes, ooc, n, control, rep_on, n_rep):
     exc_fam = next((f for f in fams if f in FAMILIES["nonproportional-amplitude"]), None)
     exciter = None
     if exc_fam:
-        _, w2, z, _ = resonance(st, "response", x_top, Run(1))
-        exciter = draw_exciter(rng, exc_fam, st, z)
+        exciter = draw_exciter(rng, exc_fam, st, resonance(st, "response", x_top, Run(1))[2])
     timed = any(c in _TIMED for c in causes) or ooc in _TIMED
     plan = draw_plan(rng, st, n, control, x_top, timed, rep_on, n_rep, exciter)
     plan.sigma_id = _sigma_id(rng, st, plan)

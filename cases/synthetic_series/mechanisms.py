@@ -10,7 +10,7 @@ joint's slip limits (``slip``: the preload). ``strength`` scales each mechanism'
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -311,10 +311,12 @@ class Ideal:
     g: float = 1.0
     family = "ideal"
     cause = None
-    extra: dict = field(default_factory=dict)
 
     def gain(self, V, W):
         return self.g * V + 0.0 * W
+
+    def nominal_gain(self, W):
+        return self.g
 
     def load(self, W):
         return 0.0 * W
