@@ -45,11 +45,13 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from cases.synthetic_series import CATALOGUE, OUT_OF_CATALOGUE, generate_series, without_stds  # noqa: E402
+from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
+                                    without_stds)
 from inverse.diagnose import diagnose  # noqa: E402
 from runs.executor import ExecutorSpec, run_sweep  # noqa: E402
 
-DEV = Path(os.environ.get("IWANFE_DEV_BENCH", Path(__file__).resolve().parents[2] / "shared" / "bench"))
+DEV = Path(os.environ.get("IWANFE_DEV_BENCH",
+                          Path(__file__).resolve().parents[2] / "shared" / "bench"))
 PATHS = ("with std", "without std")
 
 
@@ -176,7 +178,8 @@ def coverage(results):
 def score(rows, gen, path):
     """The acceptance numbers of one generator and noise path; prints and returns them."""
     got = [(r.get("truth"), r["results"][path]) for r in rows]
-    by = {k: [(t, r) for t, r in got if category(t) == k] for k in ("single", "pair", "ooc", "none")}
+    by = {k: [(t, r) for t, r in got if category(t) == k]
+          for k in ("single", "pair", "ooc", "none")}
 
     def frac(k):
         xs = by[k]
@@ -209,7 +212,8 @@ def print_cases(rows):
         cells = []
         for path in PATHS:
             x = r["results"][path]
-            txt = ("ERROR " + x["error"][:28]) if "cause" not in x else "+".join([x["cause"]] + x["also"])
+            txt = ("ERROR " + x["error"][:28] if "cause" not in x
+                   else "+".join([x["cause"]] + x["also"]))
             cells.append(f"{txt[:30]:30s} {'ok' if right(r.get('truth'), x) else '--'}")
         extra = (f"{r.get('control', '')[:1]:1s} {r.get('n', 0):2d} {r.get('repeats', 0)}"
                  f"{'r' if r.get('rep_on') else ' '}")

@@ -8,41 +8,43 @@ quadrature (no Dirac share), every mechanism is a force law or an energy law who
 first harmonic is taken numerically (:mod:`.first_harmonic`), and sizes are set in
 noise units of the simulated test, not in the diagnosis's parameters.
 
-=========================  ==============================================  =============================================
-cause id (truth)           generator: mechanism (family)                   diagnosis on main (``inverse.diagnosis_models``)
-=========================  ==============================================  =============================================
-``none``                   Jenkins bank of density R phi^chi, chi in        base: omega2 = W - K2 s^p, zeta = c/(2 omega)
-                           (-0.9, -0.1), top slip 0.2-0.9 phi_max, no       + K1 s^p/(2 omega2), tie K2/K1 = kappa(chi)
-                           Dirac; joint damping 0.3-3 zeta0 at the top
-``macro-slip``             ``slip-ring``: a second patch, uniform slider    exact four-parameter Iwan DF past phi_max
-                           density on [0.4-0.8, 1] phi_r, top 1.2-3 phi_r;  (incomplete Beta; Dirac weight S)
-                           ``tapered-edge``: the density ends in a taper
-                           (1-u)^0.5-2 over [0.55-0.85, 1] phi_m, top
-                           1.15-2.5 phi_m, no Dirac
-``quadratic-damping``      ``snubber-squeeze-film``: viscous force past a   zeta += q s^m / (1 + (u s)^m), m in [0.3, 3],
-                           clearance 0.25-0.7 X_top (no stiffness);         u in [0, 5]
-                           ``lazan-knee``: loss per cycle J X^n1 (1 +
-                           (X/X_k)^(n2-n1)), n1 2.2-2.6, n2 6-8
-``geometric-hardening``    ``power-spring``: k |x|^a sgn x, a in            omega2 += h s^n C(s_c/s), n = nu + 1.5 w,
-                           [1.5, 2.2] or [5.5, 7] (frequency exponent       nu in [0, 3], linear contact past s_c in
-                           0.5-1.2 or 4.5-6: outside 1.5-4.5);              [0, 0.9]
-                           ``hertz-stop``: one-sided (x - g)^1.5 past
-                           g = 0.1-0.6 X_top
-``thermal-drift``          ``temperature-step`` at a random test time;      omega2 += d (1 - e^(-b t))/(1 - e^(-b)),
-                           ``room-cycle``: ramp + sine of the clock time    t = run order scaled, b in [-4, 8]
-                           (run durations 0.7-1.3), not of the run index
-``nonproportional-         ``shaker-impedance``: voltage drive, coil R-L,   Box-Cox on log s: gamma (s^kappa - 1)/kappa,
-amplitude``                back-EMF Bl^2/R = 0.5-4 x the mode's damping,    gamma in [-0.95, 0.6], kappa in [0, 5]
-                           armature mass 0.02-0.15, suspension;
-                           ``amplifier-clipping``: g V_s tanh(V/V_s),
-                           top V/V_s 0.6-1.4; held level = volts
-``unexplained``            ``bolt-loosening-step`` (slip limits x lam,      (no model: the fit test fails)
-                           K_T x lam^(1/3) from a test time);
-                           ``capped-dashpot`` (viscous force capped by a
-                           slider: damping falls); ``softening-spring``
-                           (-k |x|^a, a 2.5-4); ``damping-drift`` (viscous
-                           damping follows the room clock)
-=========================  ==============================================  =============================================
+============  ===========================================  ===============================
+cause id      generator: mechanism (``family``)            diagnosis (main,
+(truth)                                                    ``inverse.diagnosis_models``)
+============  ===========================================  ===============================
+none          Jenkins-slider bank, density R phi^chi, chi  omega2 = W - K2 s^p, zeta =
+              in (-0.9, -0.1), no Dirac share; top slip    c/(2 omega) + K1 s^p/(2 omega2),
+              0.2-0.9 phi_max; joint damping 0.3-3 zeta0   K2/K1 = kappa(chi)
+              at the top, frequency drop <= 4 %
+macro-slip    ``slip-ring``: a second patch, uniform       exact four-parameter Iwan DF
+              slider density on [0.4-0.8, 1] phi_r, top    past phi_max (incomplete Beta,
+              1.2-3 phi_r; ``tapered-edge``: the density   Dirac weight S), x_top in
+              ends in a taper (1-u)^(0.5-2) over           [1.02, 6]
+              [0.55-0.85, 1] phi_m, top 1.15-2.5 phi_m
+quadratic-    ``snubber-squeeze-film``: viscous force      zeta += q s^m / (1 + (u s)^m),
+damping       past a clearance 0.25-0.7 X_top;             m in [0.3, 3], u in [0, 5]
+              ``lazan-knee``: loss per cycle J X^n1
+              (1 + (X/X_k)^(n2-n1)), n1 2.2-2.6, n2 6-8
+geometric-    ``power-spring``: k |x|^a sgn x, a in        omega2 += h s^n C(s_c/s),
+hardening     [1.5, 2.2] or [5.5, 7] (frequency exponent   n = nu + 1.5 w, nu in [0, 3]
+              0.5-1.2 or 4.5-6); ``hertz-stop``: one-      (1.5-4.5), linear contact past
+              sided (x - g)^1.5 past g = 0.1-0.6 X_top     s_c in [0, 0.9]
+thermal-      ``temperature-step`` at a random test        omega2 += d (1 - e^(-b t)) /
+drift         time; ``room-cycle``: ramp + sine of the     (1 - e^(-b)), t the run order
+              clock time (run durations 0.7-1.3)           scaled, b in [-4, 8]
+nonprop.-     ``shaker-impedance``: voltage drive, coil    Box-Cox on log s:
+amplitude     R-L, back-EMF Bl^2/R 0.5-4 x the mode's      gamma (s^kappa - 1)/kappa,
+              damping, armature mass, suspension;          gamma in [-0.95, 0.6],
+              ``amplifier-clipping`` g V_s tanh(V/V_s),    kappa in [0, 5]
+              top V/V_s 0.6-1.4; held level = volts
+unexplained   ``bolt-loosening-step`` (slip limits x lam,  none: the fit test fails
+              K_T x lam^(1/3)); ``capped-dashpot``
+              (damping falls); ``softening-spring``
+              (-k |x|^a, a 2.5-4); ``damping-drift``
+============  ===========================================  ===============================
+
+The judge branch (issue 19) moves the diagnosis's families to
+``inverse/diagnosis/causes/``, one file per cause, with the same forms.
 
 Every mechanism is sized (:mod:`.design`) to a visibility drawn in [5, 40] noise units
 (identification sd and planted repeatability) and its honest visibility, from

@@ -114,5 +114,6 @@ class SliderBank:
         elif self.shape is not None and self.R > 0:
             phi = self.lo + (self.hi - self.lo) * 0.5 * (_GX + 1.0)
             total += 0.5 * (self.hi - self.lo) * np.sum(
-                _GW * self.R * self.lo**self.chi * self.shape((phi - self.lo) / (self.hi - self.lo)))
+                _GW * self.R * self.lo**self.chi
+                * self.shape((phi - self.lo) / (self.hi - self.lo)))
         return float(total)

@@ -8,8 +8,8 @@ the files. A repeated level is identified on its own and joins the table as a ro
 the same ``level`` with its own ``run_order`` (``measured-data.md``, Repeats).
 
 Visibility (stored in the truth): every run simulated noise-free with all mechanisms
-and with one taken out, each level identified (:func:`ident.identify.identify`, relative weighting, no
-pseudo modes: noise-free FRFs need no noise model); the
+and with one taken out, each level identified (:func:`ident.identify.identify`, relative
+weighting, no pseudo modes: noise-free FRFs need no noise model); the
 range over the runs of the change in omega2 and in zeta, each in units of the run's
 noise ``sqrt(sigma_id^2 + sigma_rep^2)`` (``sigma_id`` the noisy identification's std
 of that row, ``sigma_rep`` the planted repeatability: ``2 s_f omega2``, ``s_z zeta``).

@@ -126,7 +126,8 @@ class LazanKnee(_Amplitude):
 
     def stiffness(self, X, W, run):
         r = np.asarray(X, float) / self.x_knee
-        return 0.0 * r, self.strength / np.pi * r ** (self.n1 - 2.0) * (1.0 + r ** (self.n2 - self.n1))
+        loss = r ** (self.n1 - 2.0) * (1.0 + r ** (self.n2 - self.n1))
+        return 0.0 * r, self.strength / np.pi * loss
 
 
 # ----------------------------------------------------------------- hardening / softening
