@@ -38,7 +38,7 @@ from inverse.contradictions import NoiseLevels, iwan_contradictions
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
 from inverse.diagnosis.cv import held_out_top, leave_one_out, n_top, prediction_intervals
 from inverse.diagnosis.fit import fit_model, profile_interval
-from inverse.diagnosis.models import MODELS, Model, Observations
+from inverse.diagnosis.models import MODELS, Observations
 from inverse.diagnosis.noise import one_mode_noise, test_chi2
 from inverse.diagnosis.params import physical_parameters
 from inverse.diagnosis.report import assemble

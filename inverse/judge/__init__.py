@@ -1,0 +1,52 @@
+"""The one judge of a fit: the noise model, the fit test and the model-selection rule
+shared by every command that judges a fit (``diagnose``, ``diagnose --case``, ``update``;
+``shared/spec/diagnosis.md``, "Noise has two parts").
+
+Noise model (:func:`noise_model`), per channel (``omega2``, ``zeta``; any other channel,
+e.g. the log response amplitude, the same way on an absolute scale):
+
+* **identification** -- the table's ``omega2_std`` / ``zeta_std`` (0 without them);
+* **repeatability** -- the scatter between runs of one level. Where the data hold
+  repeats (rows sharing a level), the pooled within-level variance of the relative
+  values ``y / mean_level(y) - 1`` (``nu = sum_g (n_g - 1)`` degrees of freedom).
+  Otherwise, and added to repeats of fewer than :data:`MIN_REPEAT_DOF` degrees of
+  freedom, the scatter of the level means (``ln y``) about a *model-free* smooth curve
+  of the amplitude (:func:`smooth_scatter`): a Muntz polynomial in the relative
+  amplitude, plus a quadratic trend in run order when the run order is not monotone in
+  amplitude (a drift with time is not repeatability), ``sigma^2 = RSS / (n - rank)``;
+  with too few levels for that, the difference-based estimator of Gasser, Sroka &
+  Jennen-Steinmetz (1986) with local quadratic contrasts. The curve is not the model being judged: a misfit of that model
+  cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
+  is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.
+* **total** ``= sqrt(identification^2 + repeatability^2)``, floored at
+  :data:`FLOORS` (the digits a table prints). ``dof`` is ``inf`` when the repeatability
+  part is 0 (the identification's stds are taken as known), else the estimate's.
+
+Fit test (:func:`fit_test`): with known noise ``chi2 ~ chi-square(N - k)``; with an
+estimated repeatability ``(chi2 / (N - k)) ~ F(N - k, nu)``, ``nu`` the channels' degrees
+of freedom combined by moment matching (Satterthwaite 1946):
+``nu = N^2 / sum_c (n_c^2 / nu_c)`` over the ``n_c`` rows of each estimated channel,
+``N`` the rows of every channel (a known channel adds no variance to the estimate).
+
+Selection (:func:`select`): the IC of a candidate is ``chi2 + 2k + T n_causes``
+(``T`` = :data:`T_CAUSE`, prior odds ``e^-3`` per cause, :mod:`inverse.diagnose`);
+Akaike weights ``w_i ~ exp(-IC_i / 2)``. A candidate is *eligible* when its fit test
+gives ``p >= P_UNEXPLAINED``, it is not excluded (a refuted base model, an inactive
+extension) and, if it names a cause, its held-out gain exceeds 1 (a gain over failed
+folds is None: not eligible). The named explanation is the eligible candidate of
+largest weight; none eligible: ``unexplained``, with the closest miss and why it
+missed. ``ambiguous`` when another eligible candidate has at least
+:data:`W_AMBIGUOUS` of the named one's weight.
+"""
+from __future__ import annotations
+
+from inverse.judge.bounds import Bounded, at_bound
+from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
+                                 pooled_repeats, smooth_scatter)
+from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
+                                     Selection, effective_dof, fit_test, select)
+
+__all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
+           "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
+           "fit_test", "effective_dof", "Candidate", "Selection", "select", "Bounded",
+           "at_bound"]

@@ -1,0 +1,213 @@
+"""Noise of a series: identification uncertainty plus the test's repeatability (the
+module doc of :mod:`inverse.judge`, "Noise model")."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+__all__ = ["MIN_REPEAT_DOF", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
+           "pooled_repeats"]
+
+#: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
+MIN_REPEAT_DOF = 6
+#: Noise floors: relative for omega2 and zeta, absolute for other channels.
+FLOORS = {"omega2": 1e-9, "zeta": 1e-7}
+_DEFAULT_FLOOR = 1e-2
+_RELATIVE = ("omega2", "zeta")
+
+
+@dataclass
+class NoiseModel:
+    """Noise per channel and row: ``identification``, ``repeatability``, ``total`` (each
+    ``{channel: (n,)}`` in the channel's units), ``source`` (words per channel), ``dof``
+    (per channel, ``math.inf`` when known) and ``kind`` (``repeats``, ``smooth``,
+    ``repeats+smooth`` or ``identification``)."""
+
+    identification: dict
+    repeatability: dict
+    total: dict
+    source: dict
+    dof: dict
+    kind: dict = field(default_factory=dict)
+    floor: dict = field(default_factory=dict)
+
+    @property
+    def channels(self) -> list:
+        return list(self.total)
+
+    def identification_only(self) -> "NoiseModel":
+        """The same noise with the repeatability part set to 0 (known noise)."""
+        zero = {c: np.zeros_like(v) for c, v in self.repeatability.items()}
+        total = {c: np.maximum(self.identification[c], self.floor.get(c, 0.0))
+                 for c in self.total}
+        return replace(self, repeatability=zero, total=total,
+                       source={c: "identification only" for c in self.total},
+                       dof={c: math.inf for c in self.total},
+                       kind={c: "identification" for c in self.total})
+
+    def has_identification(self) -> bool:
+        """Whether any channel has an identification part."""
+        return any(np.any(v > 0) for v in self.identification.values())
+
+    def to_json(self, values: dict) -> dict:
+        """``{channel: {source, identification_rel, repeatability_rel, total_rel, dof}}``
+        (median relative sd; absolute for channels that are not relative)."""
+        out = {}
+        for c in self.total:
+            scale = np.abs(values[c]) if c in _RELATIVE else 1.0
+            rel = lambda a: float(np.median(a / scale))  # noqa: E731
+            out[c] = {"source": self.source[c], "kind": self.kind.get(c),
+                      "identification_rel": rel(self.identification[c]),
+                      "repeatability_rel": rel(self.repeatability[c]),
+                      "total_rel": rel(self.total[c]),
+                      "relative": c in _RELATIVE,
+                      "dof": None if math.isinf(self.dof[c]) else float(self.dof[c])}
+        return out
+
+
+def _contrast(x):
+    """Unit contrast over the points ``x`` (k,) orthogonal to polynomials of degree
+    ``k - 2`` (the last left singular vector of the Vandermonde matrix)."""
+    V = np.vander(x - x.mean(), len(x) - 1, increasing=True)
+    q, _ = np.linalg.qr(V, mode="complete")
+    return q[:, -1]
+
+
+def _residual_scatter(B, y):
+    """(sd, dof) of ``y`` about its least-squares projection on the columns of ``B``."""
+    coef, _, rank, _ = np.linalg.lstsq(B, y, rcond=1e-10)
+    dof = B.shape[0] - int(rank)
+    return float(np.sqrt(np.sum((y - B @ coef) ** 2) / dof)), dof
+
+
+def smooth_scatter(x, y, t=None):
+    """Scatter of ``y`` (n,) about a model-free smooth curve over ``x`` (n,), the log
+    amplitude, distinct ``x`` (module doc): (sd, degrees of freedom).
+
+    The curve: a Muntz polynomial in the relative amplitude ``s = exp(x - max x)``,
+    ``1, ln s, s^(1/3), s^(2/3), s`` (any power law of amplitude to a few 1e-4 of its
+    range: the local-polynomial alternative leaves 1e-2 at level ratios of 2.5), plus
+    ``t, t^2`` of the run order ``t`` (when given: a drift with time is not scatter;
+    ``t`` alone, then neither, when the levels are too few), when that leaves at least 3
+    degrees of freedom. Otherwise local quadratic contrasts
+    over windows of four points (linear over three when n = 3), one degree of freedom
+    each, projected on those blind to the trend in ``t`` when given (two fewer);
+    (0, 0) for n < 3."""
+    order = np.argsort(x, kind="stable")
+    x, y = np.asarray(x, float)[order], np.asarray(y, float)[order]
+    n = x.size
+    if n < 3:
+        return 0.0, 0
+    sr = np.exp(x - x.max())
+    cols = [np.ones(n), x - x.mean(), sr ** (1 / 3), sr ** (2 / 3), sr]
+    trend = []
+    if t is not None:
+        tt = np.asarray(t, float)[order]
+        tt = (tt - tt.mean()) / (np.ptp(tt) or 1.0)
+        trend = [tt, tt**2]
+    for k in range(len(trend), -1, -1):        # t, t^2; then t; then none
+        if n - len(cols) - k >= 3:
+            return _residual_scatter(np.column_stack(cols + trend[:k]), y)
+    cols += trend
+    w = 4 if n >= 4 else 3
+    C = np.zeros((n - w + 1, n))
+    for i in range(n - w + 1):
+        C[i, i:i + w] = _contrast(x[i:i + w])
+    if t is None or C.shape[0] <= 3:
+        d = C @ y
+        return float(np.sqrt(np.mean(d**2))), int(d.size)
+    T = C @ np.column_stack(cols[-2:])                     # the trend in t seen by C
+    _, sv, vt = np.linalg.svd(T.T)
+    A = vt[int(np.sum(sv > 1e-9 * max(sv.max(), 1e-300))):].T   # combinations blind to it
+    Q, sv2, _ = np.linalg.svd(C.T @ A, full_matrices=False)
+    d = Q[:, sv2 > 1e-9 * sv2.max()].T @ y
+    return float(np.sqrt(np.mean(d**2))), int(d.size)
+
+
+def pooled_repeats(groups, y, relative: bool = True):
+    """Pooled within-group variance of ``y`` (n,) (relative to each group's mean when
+    ``relative``; ``groups`` (n,) labels): (sd, dof), (0, 0) without repeats."""
+    ss, dof = 0.0, 0
+    groups = np.asarray(groups)
+    for g in np.unique(groups):
+        v = np.asarray(y, float)[groups == g]
+        if v.size > 1:
+            r = v / v.mean() - 1.0 if relative else v
+            ss += float(np.sum((r - r.mean()) ** 2))
+            dof += v.size - 1
+    return (math.sqrt(ss / dof), dof) if dof else (0.0, 0)
+
+
+def _plural(n, word):
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
+                floors: dict | None = None, model_error: dict | None = None) -> NoiseModel:
+    """Identification uncertainty plus the test's repeatability (module doc).
+
+    Parameters
+    ----------
+    abscissa : (n,) excitation or response amplitude of each row (> 0; its log is the
+        smooth curve's variable)
+    values : {channel: (n,)} omega2 (rad^2/s^2), zeta (fraction), other channels
+        (absolute, e.g. a log response amplitude)
+    stds : {channel: (n,) or None} the identification's standard uncertainties
+    level_ids : (n,) level label of each row (rows sharing it are repeats)
+    run_order : (n,) chronological order; when it is not monotone in amplitude the
+        smooth-curve scatter is made blind to a quadratic drift with time
+    floors : overrides of :data:`FLOORS`; model_error : {channel: (n,)} added in
+        quadrature to an estimated (not identification) part.
+    """
+    floors = {**FLOORS, **(floors or {})}
+    model_error = model_error or {}
+    level_ids = np.asarray(level_ids)
+    x = np.log(np.asarray(abscissa, float))
+    ident, rep, total, source, dof, kind, floor = {}, {}, {}, {}, {}, {}, {}
+    labels = np.unique(level_ids)
+    tm = None
+    if run_order is not None:
+        tm = np.array([np.mean(np.asarray(run_order, float)[level_ids == g])
+                       for g in labels])
+        dt = np.diff(tm[np.argsort([np.mean(x[level_ids == g]) for g in labels])])
+        tm = None if np.all(dt > 0) or np.all(dt < 0) else tm
+    for c, y in values.items():
+        y = np.asarray(y, float)
+        rel = c in _RELATIVE
+        scale = np.abs(y) if rel else np.ones_like(y)
+        idn = np.zeros_like(y) if stds.get(c) is None else np.asarray(stds[c], float)
+        s_r, nu_r = pooled_repeats(level_ids, y, relative=rel)
+        n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
+        means = np.array([np.mean(y[level_ids == g]) for g in labels])
+        xm = np.array([np.mean(x[level_ids == g]) for g in labels])
+        s_s, nu_s = smooth_scatter(xm, np.log(means) if rel else means, tm)
+        if nu_r >= MIN_REPEAT_DOF:
+            s2, nu = s_r**2, nu_r
+            words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof)", "repeats"
+        elif nu_r > 0:
+            nu = nu_r + nu_s
+            s2 = (nu_r * s_r**2 + nu_s * s_s**2) / nu
+            words = (f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof) pooled with the "
+                     f"scatter about a smooth curve ({nu_s} dof)")
+            kd = "repeats+smooth"
+        else:
+            s2, nu = s_s**2, nu_s
+            words, kd = f"scatter about a smooth curve ({nu_s} dof)", "smooth"
+        id_rel2 = float(np.mean((idn / scale) ** 2))
+        r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
+        r = r_rel * scale
+        if r_rel > 0 and c in model_error:
+            r = np.sqrt(r**2 + np.asarray(model_error[c], float) ** 2)
+        if r_rel == 0.0:
+            has_id = stds.get(c) is not None
+            words = (("identification only" if has_id else "floor only")
+                     + (f" (the {words} does not exceed it)" if nu else
+                        " (too few levels for a scatter)"))
+            kd, nu = "identification", math.inf
+        fl = floors.get(c, _DEFAULT_FLOOR) * (float(np.median(np.abs(y))) if rel else 1.0)
+        ident[c], rep[c], floor[c] = idn, r, fl
+        total[c] = np.maximum(np.sqrt(idn**2 + r**2), fl)
+        source[c], dof[c], kind[c] = words, float(nu), kd
+    return NoiseModel(ident, rep, total, source, dof, kind, floor)

@@ -1,0 +1,160 @@
+"""The fit test and the one model-selection rule (the module doc of
+:mod:`inverse.judge`, "Fit test" and "Selection")."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+from inverse.judge.noise import NoiseModel
+
+__all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "FitTest", "fit_test", "effective_dof",
+           "Candidate", "Selection", "select"]
+
+#: Tail probability below which a fit leaves the data outside their noise.
+P_UNEXPLAINED = 1e-3
+#: Information-criterion cost of each cause a candidate adds.
+T_CAUSE = 6.0
+#: Weight ratio to the named explanation from which another one makes it ambiguous.
+W_AMBIGUOUS = 1.0 / 3.0
+
+
+@dataclass
+class FitTest:
+    """Is a fit within the noise? ``p_value`` (None when ``dof <= 0``), ``dof``
+    (``N - k``), ``denominator_dof`` (inf: chi-square), ``test`` (words),
+    ``rms_standardized`` (``sqrt(chi2 / N)``)."""
+
+    p_value: float | None
+    dof: int
+    denominator_dof: float
+    test: str
+    rms_standardized: float
+
+    def passes(self, p_min: float = P_UNEXPLAINED) -> bool:
+        return self.p_value is not None and self.p_value >= p_min
+
+    def to_json(self) -> dict:
+        return {"p_value": self.p_value, "dof": self.dof, "test": self.test,
+                "rms_standardized": self.rms_standardized,
+                "denominator_dof": (None if math.isinf(self.denominator_dof)
+                                    else self.denominator_dof)}
+
+
+def effective_dof(noise: NoiseModel) -> float:
+    """Degrees of freedom of the noise's estimated part, channels combined (module doc;
+    inf when every channel is known)."""
+    est = [(len(noise.total[c]), noise.dof[c]) for c in noise.total
+           if not math.isinf(noise.dof[c])]
+    if not est:
+        return math.inf
+    n_all = sum(len(v) for v in noise.total.values())    # known channels count in N
+    return n_all**2 / sum(n**2 / nu for n, nu in est)
+
+
+def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitTest:
+    """Chi-square test with known noise, F test with an estimated repeatability
+    (module doc)."""
+    dof = int(n_data - n_params)
+    rms = float(np.sqrt(chi2 / max(n_data, 1)))
+    nu = effective_dof(noise)
+    if dof <= 0:
+        return FitTest(None, dof, nu, f"none possible ({n_data} data, {n_params} "
+                                      f"parameters)", rms)
+    if math.isinf(nu):
+        return FitTest(float(stats.chi2.sf(chi2, dof)), dof, nu,
+                       f"chi-square, {dof} dof (noise known: identification)", rms)
+    return FitTest(float(stats.f.sf(chi2 / dof, dof, nu)), dof, nu,
+                   f"F({dof}, {nu:.3g}) (repeatability estimated)", rms)
+
+
+@dataclass
+class Candidate:
+    """One explanation: ``causes`` (() for the base model), ``n_params``, ``chi2`` on
+    ``n_data`` data, held-out ``gain`` (None: folds failed or too few data), ``failures``
+    (failed fits or folds), ``excluded`` (a reason it may not be named, or None)."""
+
+    causes: tuple
+    n_params: int
+    chi2: float
+    n_data: int
+    gain: float | None = None
+    failures: int = 0
+    excluded: str | None = None
+
+    @property
+    def name(self) -> str:
+        return "+".join(self.causes) if self.causes else "none"
+
+
+@dataclass
+class Selection:
+    """The rule's answer: ``cause``, ``also``, ``best`` (candidate name, the closest
+    one when ``unexplained``), ``weights`` and ``tests`` per candidate, ``eligible``,
+    ``ambiguous`` with its ``rivals``, ``unexplained`` and the ``closest_miss``
+    (candidate, p_value, gain, why) when no candidate is eligible."""
+
+    cause: str
+    also: list
+    best: str
+    weights: dict
+    tests: dict
+    eligible: list
+    rivals: list
+    unexplained: bool
+    closest_miss: dict | None = None
+    why_not: dict = field(default_factory=dict)
+
+    @property
+    def ambiguous(self) -> bool:
+        return bool(self.rivals)
+
+
+def _why_not(c: Candidate, test: FitTest, p_min: float):
+    if c.excluded:
+        return c.excluded
+    if test.p_value is None:
+        return test.test
+    if test.p_value < p_min:
+        return f"outside the noise (p = {test.p_value:.2g} < {p_min:g}, {test.test})"
+    if c.causes and c.gain is None:
+        return ("no held-out gain (failed folds)" if c.failures
+                else "no held-out gain (too few levels)")
+    if c.causes and c.gain <= 1.0:
+        return f"held-out gain {c.gain:.3g} <= 1"
+    return None
+
+
+def select(candidates, noise: NoiseModel, t_cause: float = T_CAUSE,
+           p_min: float = P_UNEXPLAINED, w_ambiguous: float = W_AMBIGUOUS) -> Selection:
+    """The one model-selection rule (module doc) over ``candidates``
+    (:class:`Candidate`; the base model has ``causes = ()``)."""
+    cands = {c.name: c for c in candidates}
+    ic = {k: c.chi2 + 2 * c.n_params + t_cause * len(c.causes) for k, c in cands.items()
+          if c.n_data > c.n_params}
+    lo = min(ic.values()) if ic else 0.0
+    raw = {k: math.exp(-(v - lo) / 2) for k, v in ic.items()}
+    tot = sum(raw.values()) or 1.0
+    weights = {k: raw.get(k, 0.0) / tot for k in cands}
+    tests = {k: fit_test(c.chi2, c.n_data, c.n_params, noise) for k, c in cands.items()}
+    why = {k: _why_not(c, tests[k], p_min) for k, c in cands.items()}
+    eligible = [k for k in cands if why[k] is None]
+    if eligible:
+        best = max(eligible, key=weights.get)
+        causes = cands[best].causes
+        if len(causes) > 1:
+            causes = tuple(sorted(causes, key=lambda c: -weights.get(c, 0.0)))
+        cause, also = (causes[0], list(causes[1:])) if causes else ("none", [])
+        rivals = [k for k in eligible if k != best
+                  and weights[k] >= w_ambiguous * weights[best]]
+        return Selection(cause, also, best, weights, tests, eligible, rivals, False,
+                         None, {k: v for k, v in why.items() if v})
+    pool = [k for k in cands if not cands[k].excluded] or list(cands)
+    best = max(pool, key=lambda k: (tests[k].p_value or 0.0, weights[k]))
+    miss = {"candidate": best, "p_value": tests[best].p_value,
+            "rms_standardized": tests[best].rms_standardized,
+            "gain": cands[best].gain, "why": why[best]}
+    return Selection("unexplained", [], best, weights, tests, [], [], True, miss,
+                     {k: v for k, v in why.items() if v})
