@@ -9,7 +9,7 @@ the same ``level`` with its own ``run_order`` (``measured-data.md``, Repeats).
 
 Visibility (stored in the truth): every run simulated noise-free with all mechanisms
 and with one taken out, each level identified (:func:`ident.identify.identify`, relative
-weighting, no pseudo modes: noise-free FRFs need no noise model); the
+weighting: noise-free FRFs need no noise model); the
 range over the runs of the change in omega2 and in zeta, each in units of the run's
 noise ``sqrt(sigma_id^2 + sigma_rep^2)`` (``sigma_id`` the noisy identification's std
 of that row, ``sigma_rep`` the planted repeatability: ``2 s_f omega2``, ``s_z zeta``).
@@ -126,8 +126,7 @@ def _identified(sims):
                 H = s["frf"] * (1 + tiny * np.cos(np.arange(H.size) * 2.39996))
             try:
                 with np.errstate(all="ignore"):
-                    m = identify(s["freq_hz"], H, n_modes=1, weighting="relative",
-                                 pseudo_modes=False).modes[0]
+                    m = identify(s["freq_hz"], H, n_modes=1, weighting="relative").modes[0]
                 break
             except (ValueError, IndexError, np.linalg.LinAlgError):
                 m = None
