@@ -148,22 +148,6 @@ def test_frequency_rising_with_damping_growing_fourfold_under_response_control()
     assert "nonproportional-amplitude" in r["separability"]["untestable"]
 
 
-def test_a_tie_is_ambiguous_and_names_both_with_the_separating_measurement():
-    # 6 response-controlled levels with an added damping: an Iwan re-tie plus a
-    # hardening with an onset mimics it, and the weights tie
-    s = generate_series("quadratic-damping", 105)
-    r = diagnose(s.data)
-    w = {"+".join(a["causes"]): a["weight"] for a in r["alternatives"]}
-    assert w["quadratic-damping"] == pytest.approx(w["geometric-hardening"], rel=0.2)
-    assert r["ambiguous"]
-    assert set(r["ambiguity"]["between"]) == {"quadratic-damping", "geometric-hardening"}
-    assert "add levels above the top one" in r["ambiguity"]["measurement"][0]
-    assert "Ambiguous" in r["summary"]
-    pair = next(p for p in r["separability"]["inseparable"]
-                if set(p["causes"]) == {"geometric-hardening", "quadratic-damping"})
-    assert pair["measurement"]
-
-
 def test_no_joint_base_fit_is_never_explained_within_the_noise():
     # force control: damping grows 4x while the frequency does not move at all
     n = 9
@@ -236,38 +220,9 @@ def test_choice_does_not_depend_on_row_order():
     assert {k: r2["parameters"][k] for k in num} == pytest.approx(num, rel=1e-6)
 
 
-# --------------------------------------------------------------------------- hidden causes
-
-
-@pytest.mark.parametrize("label", ["none", "macro-slip", "nonproportional-amplitude",
-                                   "geometric-hardening", "thermal-drift",
-                                   "quadratic-damping"])
-def test_hidden_cause_in_frf_level_series(label):
-    # the strongest explanation is the hidden cause, and alone it outweighs every other
-    # single cause (a second cause named beside it is counted by the benchmark)
-    s = generate_series(label, 2024, n_levels=10)
-    r = diagnose(s.data)
-    truth = list(s.truth["causes"]) or ["none"]
-    assert r["cause"] == truth[0], (r["summary"], r["alternatives"][:3])
-    if label == "none":
-        assert r["also"] == []
-    else:
-        singles = {a["causes"][0]: a["weight"] for a in r["alternatives"]
-                   if len(a["causes"]) == 1}
-        assert max(singles, key=singles.get) == label
-        # errors on held-out levels exist (an effect seen at the top level only need not
-        # lower the interior leave-one-out error)
-        assert r["gain"] is not None and r["gain_held_out"] is not None
-
-
-@pytest.mark.parametrize("label", ["macro-slip+quadratic-damping", "softening"])
-def test_pair_and_out_of_catalogue(label):
-    s = generate_series(label, 2024, n_levels=10)
-    r = diagnose(s.data)
-    want = sorted(s.truth["causes"])
-    assert sorted([r["cause"], *r["also"]]) == want, r["summary"]
-    if want == ["unexplained"]:
-        assert r["fit_test"]["p_value"] < 1e-3 and "No cause" in r["summary"]
+# Hidden causes in FRF-level series from the independent generator
+# (cases.synthetic_series) are scored by benchmarks/bench_diagnose.py on fresh seeds,
+# with the rates it prints, not by seed-picked cases here.
 
 
 # --------------------------------------------------------------------------- CLI
@@ -278,7 +233,7 @@ SPEC_KEYS = {"cause", "also", "alternatives", "ambiguous", "contradictions", "pa
 
 
 def test_cli_json_and_report(tmp_path, capsys):
-    s = generate_series("geometric-hardening", 2024, n_levels=10)
+    s = generate_series("geometric-hardening", 2024, n_levels=10, repeats=0)
     path = tmp_path / "hardening.csv"
     write_measured(path, s.data)
     out = tmp_path / "report"
