@@ -44,6 +44,9 @@ def resolve_case(name_or_file: str):
             case.builders["nonlinear_model"] = lambda mode=None: build_nonlinear_case(
                 "double-beam", mode=mode)
             case.builders["update"] = _double_beam_update
+            case.builders["fe_levels"] = _double_beam_levels
+            case.builders["fe_check"] = lambda measured_omega2: fe_check(
+                "double-beam", measured_omega2)
         return case
     if key == "lumped":
         return _lumped_case()
@@ -60,8 +63,16 @@ def _double_beam_update(executor="serial", progress=False, store=None, **setting
     :class:`cases.double_beam.update_study.UpdateSettings`)."""
     from cases.double_beam.update_study import UpdateSettings, run_update
 
+    settings = {k: v for k, v in settings.items() if v is not None}
     return run_update(UpdateSettings(**settings), executor=executor, progress=progress,
                       store=store)
+
+
+def _double_beam_levels(data, force_scale: float = 1.0):
+    """The double beam's FE-levels model (its Python model) of ``data``."""
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+
+    return DoubleBeamLevels.from_data(data, force_scale=force_scale)
 
 
 def _lumped_case():
