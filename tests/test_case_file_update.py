@@ -41,16 +41,46 @@ def test_stuck_prediction_is_the_case_file_mode():
     assert np.allclose(pred.zeta, 1e-3, rtol=1e-6)
 
 
-def test_base_update_recovers_seeded_chi():
+def _fit(case, data, noise=None):
     from cases.double_beam.fe_levels import Simulator
     from cases.double_beam.fe_select import base_parameters, fe_noise, fit_base
     from inverse.update import UpdateProblem
 
-    _, data, fe = _levels()
+    fe = case.builders["fe_levels"](data)
     mask = data.level <= 7
-    _, noise = fe_noise(data)
+    noise = fe_noise(data)[1] if noise is None else noise
     P, starts = base_parameters(data, mask, fe)
     f, _ = fit_base(UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P), starts)
     assert f.success
-    assert abs(f.values["chi"] - CHI_SEEDED) < 0.15
-    assert abs(f.values["zeta_v"] - 1e-3) < 2e-5     # the file's [damping] zeta
+    return f
+
+
+def test_base_update_recovers_seeded_chi():
+    """Another route (LSCF on constant-force stepped-sine FRFs of Jenkins banks): chi
+    within 0.1 (measured: -0.634, error -0.06, a bias of the route: seeds 20-22 all
+    -0.05 +- 0.01, benchmarks/bench_case_file_chi.py)."""
+    case, data, _ = _levels()
+    f = _fit(case, data)
+    assert abs(f.values["chi"] - CHI_SEEDED) < 0.1
+    assert abs(f.values["zeta_v"] - 1e-3) < 1e-5     # the file's [damping] zeta
+
+
+def test_phase_resonance_table_of_the_case_file_joint_is_fitted_exactly():
+    """The case file's own nonlinear model (cases.casefile.nonlinear: Ritz basis, its
+    damping) with the seeded chi at phase resonance: the FE-levels model (another
+    reduced basis) gives chi and zeta_v back to 1e-6."""
+    import dataclasses
+
+    from cases.casefile.nonlinear import nonlinear_case
+    from cases.casefile.virtual_test import simulated_table
+    from inverse.update import NoiseModel
+
+    case, data, _ = _levels()
+    cf, _ = case.builders["calibrated_file"]()
+    cf = dataclasses.replace(cf, interfaces=tuple(dataclasses.replace(i, chi=CHI_SEEDED)
+                                                  for i in cf.interfaces))
+    pr = simulated_table(nonlinear_case(cf, case.fe_model()), data.excitation)
+    pr.run_order = data.run_order
+    f = _fit(case, pr, NoiseModel(1e-5 * pr.omega2, 5e-4 * pr.zeta, "assumed"))
+    assert abs(f.values["chi"] - CHI_SEEDED) < 1e-6
+    assert abs(f.values["zeta_v"] - 1e-3) < 1e-9

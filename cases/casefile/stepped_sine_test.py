@@ -33,11 +33,13 @@ from runs.stepped_sine import run_campaign
 
 CHI_RANGE = (-0.7, -0.25)
 TOP_SLIP = 0.4
+#: smallest slider slip of the Jenkins banks, in phi_max (below the level-1 slip)
+BANK_LOW = 1e-5
 SIGMA_OMEGA2, SIGMA_ZETA = 1e-5, 5e-4
 HB = HBSettings(n_harmonics=5, n_time=64, odd_only=True)
 #: lines: from ``-BAND_HALF_POWER`` to ``+BAND_HALF_POWER / 2`` half-power bandwidths about
 #: the stuck frequency, ``LINES`` of them
-BAND_HALF_POWER, LINES = 10.0, 61
+BAND_HALF_POWER, LINES = 3.0, 41
 
 
 def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
@@ -62,7 +64,7 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
     slip_per_n = float(np.max(np.abs(model.slip_matrix @ phi))) * abs(phi[nc.drive_dof]) \
         / (2.0 * zeta * omega ** 2)          # linear modal slip at resonance per N
     force = TOP_SLIP * nc.phi_max / slip_per_n * 2.0 ** (np.arange(10) - 9.0)
-    bank = JointBank.log_spaced(nc.joints, 1e-3 * nc.phi_max, 8)
+    bank = JointBank.log_spaced(nc.joints, BANK_LOW * nc.phi_max, 8)
     f0 = omega / (2 * math.pi)
     hp = 2.0 * zeta * f0
     lines = np.linspace(f0 - BAND_HALF_POWER * hp, f0 + 0.5 * BAND_HALF_POWER * hp, LINES)
