@@ -5,7 +5,7 @@ file whose joint interfaces all have law ``iwan4`` and a ``kt``, with a ``[drive
 a ``[measured]`` table.
 
 Defaults a command may override: the data are the file's table, the mode label the
-file's ``[measured] mode`` (else the table's first mode), the fit levels all but the
+file's ``[measured] mode`` when the table has it (else the table's only mode label), the fit levels all but the
 top three of the table (at least 5 fitted). The file's ``chi``, ``fs``, ``beta`` are
 the nominal joint: ``update`` fits ``chi`` and the joint strength to the data.
 """
@@ -36,7 +36,11 @@ def _defaults(cf) -> dict:
     from ident.measured import read_measured
 
     table = read_measured(cf.measured.file)
-    mode = cf.measured.mode or int(table.mode[0])
+    labels = sorted({int(m) for m in table.mode})
+    mode = cf.measured.mode if cf.measured.mode in labels else labels[0]
+    if len(labels) > 1 and mode != cf.measured.mode:
+        raise InputError(f"{cf.path}: [measured] mode = {cf.measured.mode} is none of the "
+                         f"table's mode labels {labels}: give --mode")
     levels = sorted(int(v) for v in table.for_mode(mode).level)
     fit = levels[:-3] if len(levels) >= 8 else levels
     return {"data_path": str(cf.measured.file), "mode_label": int(mode),

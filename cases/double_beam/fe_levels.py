@@ -215,8 +215,8 @@ class DoubleBeamLevels:
     def joint(self, p: dict) -> dict:
         """The glue joint of parameter set ``p``: ``chi, R, K_T, beta, phi_max, F_S``
         and the per-node :class:`joints.iwan.IwanParameters` (``params``)."""
-        K_T = 10.0 ** float(p.get("log10_kt", math.log10(self.default_kt)))
-        lin = self.linear(K_T)
+        lin = self.linear(10.0 ** float(p.get("log10_kt", math.log10(self.default_kt))))
+        K_T = lin.K_T                   # the model's own (log10 K_T rounded to 1e-9)
         chi = float(p["chi"])
         if not -1.0 < chi < 0.0:
             raise ValueError(f"chi must lie in (-1, 0), got {chi:.4g}")
