@@ -2,8 +2,11 @@
 
 :func:`resolve_case` gives a :class:`cases.case.Case` for a shipped name
 (:data:`SHIPPED`: each a case file, or a Python case such as the lumped 10-DOF model) or
-for a path to a ``.toml`` case file. The older helpers below serve the commands that stay
-with the double beam this session (``estimate --case``, ``diagnose --case``):
+for a path to a ``.toml`` case file; the double beam adds its Python FE loop
+(``update``, ``fe_levels``, ``fe_check``), a case file with iwan4 joints and measured data
+gets the generic one (:mod:`cases.casefile.fe_loop`). The older helpers below serve the
+commands that stay with the double beam this session (``estimate --case``,
+``diagnose --backbone``):
 :func:`build_case` builds the double beam's Python model (equal to its case file's to
 ~2e-8 in frequency, the calibrated clamp grip's last digits), :data:`MEASURED_DATA`,
 :func:`fe_check`. The case modules are imported only when a case is built.

@@ -84,3 +84,17 @@ def test_phase_resonance_table_of_the_case_file_joint_is_fitted_exactly():
     f = _fit(case, pr, NoiseModel(1e-5 * pr.omega2, 5e-4 * pr.zeta, "assumed"))
     assert abs(f.values["chi"] - CHI_SEEDED) < 1e-6
     assert abs(f.values["zeta_v"] - 1e-3) < 1e-9
+
+
+def test_cli_update_on_the_case_file(capsys):
+    """``iwanfe update --case FILE --json``: the one judge names ``none`` (the table hides
+    no effect) and chi lies within 0.1 of the seed."""
+    import json
+
+    from cli.main import main
+
+    assert main(["update", "--case", str(LAP), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["case"] == "bolted-lap-cantilever" and s["cause"] == "none"
+    assert abs(s["parameters"]["chi"]["value"] - CHI_SEEDED) < 0.1
+    assert s["parameters"]["log10_kt"]["value"] == 7.0          # the file's kt, assumed

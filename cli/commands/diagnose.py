@@ -54,8 +54,8 @@ def register(subparsers) -> None:
     parser.add_argument("--mode", type=int, default=None,
                         help="mode label in the file (default: the only/first one)")
     parser.add_argument("--backbone", action="store_true",
-                        help="with FILE and --case (a case with a joint setup): also predict every level from "
-                             "the FE backbone (EPMC) of the joint estimated from the levels "
+                        help="with FILE and --case (a case with a joint setup): also "
+                             "predict every level from the FE backbone (EPMC) of the joint estimated from the levels "
                              "below the top three (iwanfe estimate --backbone)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
     parser.add_argument("--out", metavar="DIR", default=None,
