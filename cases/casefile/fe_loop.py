@@ -5,8 +5,8 @@ file whose joint interfaces all have law ``iwan4`` and a ``kt``, with a ``[drive
 a ``[measured]`` table.
 
 Defaults a command may override: the data are the file's table, the mode label the
-file's ``[measured] mode`` when the table has it (else the table's only mode label), the fit levels all but the
-top three of the table (at least 5 fitted). The file's ``chi``, ``fs``, ``beta`` are
+file's ``[measured] mode`` when the table has it (else the table's only mode label),
+the fit levels all but the top three of the table (at least 5 fitted). The file's ``chi``, ``fs``, ``beta`` are
 the nominal joint: ``update`` fits ``chi`` and the joint strength to the data.
 """
 from __future__ import annotations

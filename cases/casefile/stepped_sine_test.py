@@ -7,11 +7,12 @@ per octave, :meth:`fe.reduction.JointBank.log_spaced`), not the exact Iwan descr
 function; a stepped sine over ``LINES`` lines around the mode solved by multi-harmonic
 balance (harmonics 1, 3, 5; 64 AFT samples, :func:`runs.stepped_sine.run_campaign`), not
 phase resonance; each level's receptance identified by LSCF
-(:func:`ident.identify.identify_modes`, the mode with the largest residue); Gaussian repeatability noise (relative sd
-``SIGMA_OMEGA2`` of omega^2, ``SIGMA_ZETA`` of zeta) from the seed. The joints keep the
-file's ``kt``, ``fs``, ``beta`` and take the seeded ``chi`` (uniform in ``CHI_RANGE``);
-the forces (N, 10 levels over a factor 512) put the top level's linear slip at
-``TOP_SLIP`` phi_max (micro-slip only: the hidden effect is ``none``).
+(:func:`ident.identify.identify_modes`, the mode with the largest residue); Gaussian
+repeatability noise (relative sd ``SIGMA_OMEGA2`` of omega^2, ``SIGMA_ZETA`` of zeta)
+from the seed. The joints keep the file's ``kt``, ``fs``, ``beta`` and take the seeded
+``chi`` (uniform in ``CHI_RANGE``); the forces (N, 10 levels over a factor 512) put the
+top level's linear slip at ``TOP_SLIP`` phi_max (micro-slip only: the hidden effect is
+``none``).
 
 ``python -m cases.casefile.stepped_sine_test CASE.toml OUT.csv SEED`` writes the table
 (``x_source = simulated``; the seeded chi only printed) and prints the truth. SI units.

@@ -51,8 +51,8 @@ def _g(v, spec=".3g"):
 def format_fe(fe: dict) -> list:
     """Text lines of the FE-level diagnosis."""
     ft = fe["fit_test"]
-    lines = [f"FE level ({fe.get('model', 'double beam')} refitted; fit levels {fe['fit_levels']}, held out "
-             f"{fe['held_out_levels']}; judged by {fe['rule']}):",
+    lines = [f"FE level ({fe.get('model', 'double beam')} refitted; fit levels "
+             f"{fe['fit_levels']}, held out {fe['held_out_levels']}; judged by {fe['rule']}):",
              f"  FE cause: {fe['cause']}" + (f" + {', '.join(fe['also'])}" if fe["also"] else "")
              + (f" (closest candidate: {fe['candidate']}, {fe['closest_miss']['why']})"
                 if fe["unexplained"] else ""),
@@ -143,7 +143,7 @@ def write_fe_files(result: dict, out: Path) -> list:
                       [r["held_out"] for r in rows],
                       title=f"measured vs base FE vs extended FE ({fe['cause']})", path=png)
     md = out / "fe_diagnosis.md"
-    md.write_text(f"# FE-level diagnosis ({result['fe'].get('model', 'double beam')})\n\n" + "\n".join(
+    md.write_text(f"# FE-level diagnosis ({fe.get('model', 'double beam')})\n\n" + "\n".join(
         ("    " + ln) for ln in format_fe(fe)) + "\n\n![FE levels](fe_levels.png)\n",
         encoding="utf-8")
     return [png, md]

@@ -137,7 +137,8 @@ def summary(r: dict) -> dict:
                     "shift_top_zeta_rel": (a["headline"]["zeta"][-1] / base_head["zeta"][-1] - 1)
                     if base_head["zeta"] else None}
                    for a in r.get("assumptions", [])]
-    return {"case": r.get("case", "double-beam"), "source": str(data.source), "mode": r["settings"].mode_label,
+    return {"case": r.get("case", "double-beam"), "source": str(data.source),
+            "mode": r["settings"].mode_label,
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
             "derived": derived, "levels": levels, "misfit": statements,
