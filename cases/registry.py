@@ -2,8 +2,11 @@
 
 :func:`resolve_case` gives a :class:`cases.case.Case` for a shipped name
 (:data:`SHIPPED`: each a case file, or a Python case such as the lumped 10-DOF model) or
-for a path to a ``.toml`` case file. The older helpers below serve the commands that stay
-with the double beam this session (``estimate --case``, ``diagnose --case``):
+for a path to a ``.toml`` case file; the double beam adds its Python FE loop
+(``update``, ``fe_levels``, ``fe_check``), a case file with iwan4 joints and measured data
+gets the generic one (:mod:`cases.casefile.fe_loop`). The older helpers below serve the
+commands that stay with the double beam this session (``estimate --case``,
+``diagnose --backbone``):
 :func:`build_case` builds the double beam's Python model (equal to its case file's to
 ~2e-8 in frequency, the calibrated clamp grip's last digits), :data:`MEASURED_DATA`,
 :func:`fe_check`. The case modules are imported only when a case is built.
@@ -44,6 +47,9 @@ def resolve_case(name_or_file: str):
             case.builders["nonlinear_model"] = lambda mode=None: build_nonlinear_case(
                 "double-beam", mode=mode)
             case.builders["update"] = _double_beam_update
+            case.builders["fe_levels"] = _double_beam_levels
+            case.builders["fe_check"] = lambda measured_omega2: fe_check(
+                "double-beam", measured_omega2)
         return case
     if key == "lumped":
         return _lumped_case()
@@ -60,8 +66,16 @@ def _double_beam_update(executor="serial", progress=False, store=None, **setting
     :class:`cases.double_beam.update_study.UpdateSettings`)."""
     from cases.double_beam.update_study import UpdateSettings, run_update
 
+    settings = {k: v for k, v in settings.items() if v is not None}
     return run_update(UpdateSettings(**settings), executor=executor, progress=progress,
                       store=store)
+
+
+def _double_beam_levels(data, force_scale: float = 1.0):
+    """The double beam's FE-levels model (its Python model) of ``data``."""
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+
+    return DoubleBeamLevels.from_data(data, force_scale=force_scale)
 
 
 def _lumped_case():

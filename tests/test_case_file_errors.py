@@ -10,7 +10,8 @@ from cases.casefile.schema import read_case_file
 from cases.casefile.tables import CaseFileError
 from cli.main import main
 
-GOOD = open("docs/case-files/bolted-lap-cantilever.toml").read()
+# without its [measured] table (the cases below add their own, in tmp directories)
+GOOD = open("docs/case-files/bolted-lap-cantilever.toml").read().split("\n[measured]")[0]
 
 
 def _edit(old: str, new: str) -> str:

@@ -1,6 +1,8 @@
 """A case file as a :class:`cases.case.Case`: the FE model (calibrated, or at the file's
 values), the measured data it names, its nonlinear model when every joint parameter is
-given, and its summary."""
+given, its summary, and (joint interfaces with law ``iwan4`` and their ``kt``, a drive
+and a measured-data table) its FE-levels model and ``update``
+(:mod:`cases.casefile.fe_loop`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -8,6 +10,7 @@ from pathlib import Path
 
 from cases.case import Case
 from cases.casefile.build import build_model
+from cases.casefile import fe_loop
 from cases.casefile.calibrate import calibrate
 from cases.casefile.nonlinear import missing_joint_parameters, nonlinear_case
 from cases.casefile.schema import read_case_file
@@ -36,5 +39,8 @@ def case_from_file(path) -> Case:
     if joints and cf.drive is not None and not missing_joint_parameters(cf):
         builders["nonlinear_model"] = lambda mode=None: nonlinear_case(
             file_at()[0], fe_model(), mode=mode)
+    if fe_loop.qualifies(cf):
+        builders["fe_levels"] = fe_loop.levels_builder(cf)
+        builders["update"] = fe_loop.update_builder(cf)
     return Case(name=cf.name, description=cf.description, source=str(cf.path),
                 builders=builders, file=cf)

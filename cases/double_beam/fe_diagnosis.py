@@ -125,7 +125,7 @@ def held_out_table(data, mask, pred, problem, f, fit_ok: bool) -> tuple:
 
 
 def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
-                 progress=None) -> dict:
+                 progress=None, levels=None) -> dict:
     """FE-level diagnosis of one mode's levels (module docstring).
 
     Parameters
@@ -136,6 +136,8 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
     force_scale : float, N per excitation unit (every omega^2, zeta is invariant to it).
     causes : iterable of cause ids (default: every FE extension).
     progress : callable(str) or None, told what is being fitted.
+    levels : callable(data, force_scale=) -> FE-levels model (default the double beam's
+        :class:`DoubleBeamLevels`; a case file's :class:`cases.casefile.levels.CaseLevels`).
 
     Returns
     -------
@@ -146,7 +148,7 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
     mask = default_fit_mask(data.level) if mask is None else np.asarray(mask, dtype=bool)
     if mask.sum() < 5:
         raise ValueError(f"the FE diagnosis needs at least 5 fit levels, got {int(mask.sum())}")
-    fe = DoubleBeamLevels.from_data(data, force_scale=force_scale)
+    fe = (levels or DoubleBeamLevels.from_data)(data, force_scale=force_scale)
     s = fe_select(data, mask, fe, causes, progress)
     return report(data, mask, s)
 
@@ -184,7 +186,7 @@ def report(data, mask, s: dict) -> dict:
                 "fits": sum(c.fit is None for c in judged["candidates"].values()),
                 "profile_points": sum(p.failed_points for p in profiles.values())}
     summary = {
-        "cause": sel.cause, "also": sel.also, "candidate": chosen.name,
+        "model": fe.label, "cause": sel.cause, "also": sel.also, "candidate": chosen.name,
         "fit_levels": [int(v) for v in data.level[mask]],
         "held_out_levels": [int(v) for v in data.level[~mask]],
         "noise": s["judge_noise"].to_json({"omega2": data.omega2, "zeta": data.zeta}),

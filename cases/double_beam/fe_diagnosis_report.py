@@ -26,16 +26,18 @@ def _digest(d) -> str:
     return h.hexdigest()
 
 
-def add_fe_diagnosis(result: dict, data, out=None) -> dict:
+def add_fe_diagnosis(result: dict, data, out=None, levels=None, model_key: str = "") -> dict:
     """Add ``fe_levels`` and ``fe`` (FE cause, gains, held-out errors) to ``result``;
-    with ``out`` also write :func:`write_fe_files`. Returns ``result``."""
+    with ``out`` also write :func:`write_fe_files`. ``levels``: the FE-levels model of
+    :func:`cases.double_beam.fe_diagnosis.fe_diagnosis`, ``model_key`` names it (for the
+    reuse of a finished diagnosis). Returns ``result``."""
     from cases.double_beam.fe_diagnosis import fe_diagnosis
 
     mode = result.get("mode")
     d = data.for_mode(int(mode)) if mode is not None else data
-    key = _digest(d)
+    key = (_digest(d), model_key)
     if key not in _DONE:                     # the same data diagnosed again: reuse
-        _DONE[key] = fe_diagnosis(d)
+        _DONE[key] = fe_diagnosis(d, levels=levels)
     result.update(copy.deepcopy(_DONE[key]))
     if out is not None:
         write_fe_files(result, Path(out))
@@ -49,8 +51,8 @@ def _g(v, spec=".3g"):
 def format_fe(fe: dict) -> list:
     """Text lines of the FE-level diagnosis."""
     ft = fe["fit_test"]
-    lines = [f"FE level (double beam refitted; fit levels {fe['fit_levels']}, held out "
-             f"{fe['held_out_levels']}; judged by {fe['rule']}):",
+    lines = [f"FE level ({fe.get('model', 'double beam')} refitted; fit levels "
+             f"{fe['fit_levels']}, held out {fe['held_out_levels']}; judged by {fe['rule']}):",
              f"  FE cause: {fe['cause']}" + (f" + {', '.join(fe['also'])}" if fe["also"] else "")
              + (f" (closest candidate: {fe['candidate']}, {fe['closest_miss']['why']})"
                 if fe["unexplained"] else ""),
@@ -141,7 +143,7 @@ def write_fe_files(result: dict, out: Path) -> list:
                       [r["held_out"] for r in rows],
                       title=f"measured vs base FE vs extended FE ({fe['cause']})", path=png)
     md = out / "fe_diagnosis.md"
-    md.write_text("# FE-level diagnosis (double beam)\n\n" + "\n".join(
+    md.write_text(f"# FE-level diagnosis ({fe.get('model', 'double beam')})\n\n" + "\n".join(
         ("    " + ln) for ln in format_fe(fe)) + "\n\n![FE levels](fe_levels.png)\n",
         encoding="utf-8")
     return [png, md]

@@ -134,6 +134,11 @@ class DoubleBeamLevels:
     config : DoubleBeamConfig, optional (default: the shipped case).
     """
 
+    #: K_T (N/m) when a parameter set has no ``log10_kt`` (assumed)
+    default_kt = DEFAULT_KT
+    #: what the model is, in reports
+    label = "double beam"
+
     def __init__(self, excitation, run_order, omega2_1: float, zeta_1: float,
                  force_scale: float = 1.0, config: DoubleBeamConfig | None = None,
                  n_modes: int = N_MODES):
@@ -172,10 +177,22 @@ class DoubleBeamLevels:
         if self.config.clamp_length is None:      # the grip calibrated to 252.0 Hz
             cfg = replace(cfg, clamp_length=calibrate_clamp_length(cfg, xtol=1e-10))
         model = build_double_beam(cfg)
+
+        def lambda3(phi):                         # int |phi_w|^3 dx of the lower strip
+            w = model.dofmaps[0].component(model.full_vector(phi), W)
+            return float(np.sum(model.mesh.tributary_length() * np.abs(w) ** 3))
+
+        return self.reduce(model, K_T, lambda3, width=cfg.width, grip=cfg.grip)
+
+    def reduce(self, model, K_T: float, lambda3, width: float, grip: float) -> LinearPart:
+        """The :class:`LinearPart` of an FE ``model`` with joints (``M``,
+        ``K_without_joints``, ``slip_matrix``, ``joint_stiffness``, ``drive_dof``,
+        ``response_dof``, ``modes``); ``lambda3(phi)``: ``int |phi_w|^3 dx`` of the
+        strip the air drag acts on (m kg^-3/2), ``width`` its width (m)."""
         n = model.M.shape[0]
         system = JointedSystem(M=model.M, K=model.K_without_joints, C=sp.csr_matrix((n, n)),
                                G=model.slip_matrix, K_T=model.joint_stiffness)
-        red = reduced_basis(system, self.n_modes, static_joint_modes=True)
+        red = reduced_basis(system, min(self.n_modes, n - 2), static_joint_modes=True)
         r = red.n_reduced
         red = replace(red, M=np.eye(r), K=np.diag(red.omega ** 2), C=np.zeros((r, r)))
         fe_mode = pick_fe_mode(model, self.omega_1)
@@ -187,21 +204,19 @@ class DoubleBeamLevels:
         slips1 = joint_slip_at_resonance(model.M, model.K, model.slip_matrix,
                                          f * self.force_scale * self.excitation[0],
                                          float(omega[fe_mode - 1]), self.zeta_1)
-        w_lower = model.dofmaps[0].component(model.full_vector(phi), W)
-        lam3 = float(np.sum(model.mesh.tributary_length() * np.abs(w_lower) ** 3))
         kj = np.asarray(model.joint_stiffness, dtype=float)
         sign = np.sign(red.basis[:, k] @ (model.M @ phi))
-        return LinearPart(K_T=K_T, grip=cfg.grip, red=red, k=k, omega_k=float(red.omega[k]),
+        return LinearPart(K_T=K_T, grip=grip, red=red, k=k, omega_k=float(red.omega[k]),
                           load=red.load(f), shares=kj / kj.sum(),
                           gphi=np.asarray(model.slip_matrix @ phi).ravel(), slips1=slips1,
-                          lambda3=lam3, phi_drive=float(sign * phi[int(model.drive_dof)]),
-                          width=cfg.width, response_row=red.basis[int(model.response_dof)].copy())
+                          lambda3=lambda3(phi), phi_drive=float(sign * phi[int(model.drive_dof)]),
+                          width=width, response_row=red.basis[int(model.response_dof)].copy())
 
     def joint(self, p: dict) -> dict:
         """The glue joint of parameter set ``p``: ``chi, R, K_T, beta, phi_max, F_S``
         and the per-node :class:`joints.iwan.IwanParameters` (``params``)."""
-        K_T = 10.0 ** float(p.get("log10_kt", math.log10(DEFAULT_KT)))
-        lin = self.linear(K_T)
+        lin = self.linear(10.0 ** float(p.get("log10_kt", math.log10(self.default_kt))))
+        K_T = lin.K_T                   # the model's own (log10 K_T rounded to 1e-9)
         chi = float(p["chi"])
         if not -1.0 < chi < 0.0:
             raise ValueError(f"chi must lie in (-1, 0), got {chi:.4g}")

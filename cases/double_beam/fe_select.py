@@ -62,7 +62,8 @@ def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
                              "viscous modal damping ratio"),
          "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
                             "stuck-glue natural frequency of the mode"),
-         "log10_kt": Parameter("log10_kt", math.log10(DEFAULT_KT), 6.0, 11.0, 0.5, "log10 N/m",
+         "log10_kt": Parameter("log10_kt", math.log10(getattr(fe, "default_kt", DEFAULT_KT)),
+                               6.0, 11.0, 0.5, "log10 N/m",
                                "stuck tangential stiffness of the whole glue"),
          "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
                                 "1", "ln(phi_max / a_ref): macro-slip onset in units of "

@@ -137,7 +137,8 @@ def summary(r: dict) -> dict:
                     "shift_top_zeta_rel": (a["headline"]["zeta"][-1] / base_head["zeta"][-1] - 1)
                     if base_head["zeta"] else None}
                    for a in r.get("assumptions", [])]
-    return {"case": "double-beam", "source": str(data.source), "mode": r["settings"].mode_label,
+    return {"case": r.get("case", "double-beam"), "source": str(data.source),
+            "mode": r["settings"].mode_label,
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
             "derived": derived, "levels": levels, "misfit": statements,
@@ -153,11 +154,18 @@ def summary(r: dict) -> dict:
             "timing_s": r["timing_s"]}
 
 
+def _grip(d: dict) -> str:
+    """How the structure was calibrated (the double beam's grip, or the case file)."""
+    if d["grip_m"] is None or math.isnan(d["grip_m"]):
+        return "structure as the case file gives or calibrates it"
+    return f"grip {1e3 * d['grip_m']:.3f} mm (calibrated to 252.0 Hz for this K_T)"
+
+
 def format_text(s: dict) -> str:
     """Readable summary (the command's default output)."""
     n = s["noise"]
     ft = s["fit_test"]
-    lines = [f"iwanfe update --case double-beam  ({s['source']}, mode {s['mode']}, fit levels "
+    lines = [f"iwanfe update --case {s['case']}  ({s['source']}, mode {s['mode']}, fit levels "
              f"{s['fit_levels'][0]}-{s['fit_levels'][-1]})",
              f"model: {s['model']} (cause {s['cause']}"
              + (f" + {', '.join(s['also'])}" if s["also"] else "") + "; chosen by the one "
@@ -175,7 +183,7 @@ def format_text(s: dict) -> str:
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
                  f"F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} "
-                 f"N/m, grip {1e3 * d['grip_m']:.3f} mm (calibrated to 252.0 Hz); force scale "
+                 f"N/m, {_grip(d)}; force scale "
                  f"{d['force_scale_N_per_unit']:g} N/V assumed (omega2, zeta invariant to it)")
     lines.append("level held  f meas [Hz]  f model [Hz]  err [Hz]   zeta meas   zeta model  "
                  "err [%]  slip/phi_max")
@@ -234,11 +242,11 @@ def markdown(s: dict) -> str:
         f"{_fmt(None if a['shift_top_zeta_rel'] is None else 100 * a['shift_top_zeta_rel'], 3)} | "
         f"{a['top_slip_over_phi_max']:.3g} |" for a in s["assumptions"]) or "| (not run) | | | | |"
     d = s["derived"]
-    return f"""# FE model updating of the double beam
+    return f"""# FE model updating: {s['case']}
 
 Data: `{s['source']}`, mode {s['mode']}; fitted levels {s['fit_levels']}, held out
-{s['held_out_levels']}. The nonlinear FE double beam (one continuous four-parameter Iwan
-element per glue node, first-harmonic balance with the exact describing function at the
+{s['held_out_levels']}. The nonlinear FE model (one continuous four-parameter Iwan
+element per joint node, first-harmonic balance with the exact describing function at the
 phase resonance of the mode) is fitted by weighted least squares to omega^2 and zeta of
 the fit levels. Noise: {s['noise']['source']}: sigma_omega2 =
 {s['noise']['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = {s['noise']['sigma_zeta'][0]:.3g}.
@@ -255,9 +263,8 @@ widened by the misfit (chi2/dof) when the model misfits.
 {rows}
 
 The joint they make: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m,
-F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} N/m; grip
-{1e3 * d['grip_m']:.3f} mm (calibrated: the stuck mode at 252.0 Hz for this K_T), force
-scale {d['force_scale_N_per_unit']:g} N/V (assumed; omega^2 and zeta are exactly invariant
+F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} N/m;
+{_grip(d)}, force scale {d['force_scale_N_per_unit']:g} N/V (assumed; omega^2 and zeta are exactly invariant
 to it, R~ scales as its -(chi+1) power, phi_max and F_S as its first power).
 
 ## Levels (* = held out)
@@ -300,12 +307,12 @@ def write_update(r: dict, out) -> list:
         mp = r["base_prediction"]
         models["base FE model (no cause)"] = (mp.frequency_hz, mp.zeta)
     plot_level_models(data.level, f, data.zeta, noise.sigma_omega2 / (8 * math.pi ** 2 * f),
-                      noise.sigma_zeta, models, ~mask, title="FE model updating, double beam",
+                      noise.sigma_zeta, models, ~mask, title=f"FE model updating, {s['case']}",
                       path=out / "update_levels.png")
     plot_profiles({_LABEL.get(n, n): ([q.value for q in p.points], p.delta, p.threshold, p.best)
                    for n, p in r["profiles"].items()}, title="profile likelihoods",
                   path=out / "update_profiles.png")
-    model = {"case": "double-beam", "cause": s["cause"], "also": s["also"],
+    model = {"case": s["case"], "cause": s["cause"], "also": s["also"],
              "model": s["model"], "unexplained": s["unexplained"],
              "fit_test": s["fit_test"], "parameters": s["parameters"], "joint": s["derived"],
              "fit_levels": s["fit_levels"], "noise": s["noise"],

@@ -112,13 +112,13 @@ def _ranges(items: list) -> dict:
     return out
 
 
-def problem_digest(data, mask, settings: UpdateSettings) -> str:
+def problem_digest(data, mask, settings: UpdateSettings, model: str = "") -> str:
     """SHA-256 of everything a profile branch depends on besides its task: the data,
     the fit levels, the settings and the FE model's configuration."""
     h = hashlib.sha256(b"iwanfe-update/1")
     for a in (data.level, data.excitation, data.omega2, data.zeta, data.run_order, mask):
         h.update(np.ascontiguousarray(a, dtype=float).tobytes())
-    h.update(repr((settings, DoubleBeamConfig())).encode())
+    h.update(repr((settings, model or DoubleBeamConfig())).encode())
     return h.hexdigest()
 
 
@@ -141,19 +141,24 @@ def _adopt(problem, best, profiles):
 
 
 def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
-               progress: bool = False, store=None) -> dict:
+               progress: bool = False, store=None, levels=None, case_name: str = "double-beam",
+               model_key: str = "") -> dict:
     """Select, fit, profile and assess the FE model (module docstring). ``store``: a
-    directory where finished profile branches are kept (a rerun loads them). Returns a
-    dict (rendered by :mod:`cases.double_beam.update_report`)."""
+    directory where finished profile branches are kept (a rerun loads them);
+    ``levels(data, force_scale=)``: the FE-levels model (default the double beam's,
+    :class:`DoubleBeamLevels`; a case file's: :class:`cases.casefile.levels.CaseLevels`),
+    ``case_name`` and ``model_key`` (what the model is built from, for the store's
+    digest) go with it. Returns a dict (rendered by
+    :mod:`cases.double_beam.update_report`)."""
     t0 = time.perf_counter()
     data, mask = load_levels(settings)
-    fe = DoubleBeamLevels.from_data(data, force_scale=settings.force_scale)
+    fe = (levels or DoubleBeamLevels.from_data)(data, force_scale=settings.force_scale)
     sel = fe_select(data, mask, fe)
     ext, chosen = chosen_model(sel)
     problem, best, noise = chosen.problem, chosen.fit, sel["noise"]
     P, free = problem.parameters, best.free
     t_sel = time.perf_counter() - t0
-    store = None if store is None else (store, problem_digest(data, mask, settings))
+    store = None if store is None else (store, problem_digest(data, mask, settings, model_key))
     profiles = {}
     if settings.profiles == "all":
         kt = best.values["log10_kt"]
@@ -183,7 +188,7 @@ def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
             sens[name]["grid_inside"] = [p.value for p in inside]
     base = sel["base"].fit
     return {
-        "settings": settings, "data": data, "fit_mask": mask, "noise": noise,
+        "case": case_name, "settings": settings, "data": data, "fit_mask": mask, "noise": noise,
         "selection": sel, "extension": ext, "candidate": chosen.name,
         "parameters": P, "fit": best, "base_fit": base, "profiles": profiles,
         "micro_limit": MacroSlip.micro_limit(fe, best.values),

@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 
 from cli import validate
-from cases.registry import CASES, MEASURED_DATA, fe_check
+from cases.registry import resolve_case
 from cli.commands.diagnose_report import noise_words
 from cli.series_options import add_series_arguments, series_from_args
 from ident.errors import InputError
@@ -44,16 +44,18 @@ def register(subparsers) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_series_arguments(parser, required=False)   # FILE...: a table or FRF files
-    parser.add_argument("--case", default=None, metavar="NAME",
-                        help="instead of FILE: 'double-beam' (the shipped paper data) or "
-                             "'synthetic:LABEL:SEED' (a simulated, identified series hiding "
-                             "LABEL: none, a cause, two causes joined by '+', or "
-                             "out-of-catalogue); with FILE: a model case for its FE check")
+    parser.add_argument("--case", default=None, metavar="NAME|FILE",
+                        help="instead of FILE: a case (shipped name or case file) with its "
+                             "measured data, or 'synthetic:LABEL:SEED' (a simulated, "
+                             "identified series hiding LABEL: none, a cause, two causes "
+                             "joined by '+', or out-of-catalogue); with FILE: the model "
+                             "case. A case with an FE-levels model (iwan4 joints) also gets "
+                             "the FE-level diagnosis")
     parser.add_argument("--mode", type=int, default=None,
                         help="mode label in the file (default: the only/first one)")
     parser.add_argument("--backbone", action="store_true",
-                        help="with FILE and --case double-beam: also predict every level from "
-                             "the FE backbone (EPMC) of the joint estimated from the levels "
+                        help="with FILE and --case (a case with a joint setup): also "
+                             "predict every level from the FE backbone (EPMC) of the joint estimated from the levels "
                              "below the top three (iwanfe estimate --backbone)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
     parser.add_argument("--out", metavar="DIR", default=None,
@@ -64,18 +66,15 @@ def register(subparsers) -> None:
 def load(file: str | None, case: str | None, args=None):
     """The MeasuredData to diagnose, and the hidden truth for synthetic cases.
 
-    ``FILE`` alone, ``--case`` alone (its shipped data or a synthetic case), or ``FILE``
-    with a model case (``--case double-beam``: the file's data, the case's FE check).
+    ``FILE`` alone, ``--case`` alone (its measured data or a synthetic case), or ``FILE``
+    with a model case (the file's data, the case's FE-level checks).
     """
     if file is None and case is None:
-        raise InputError("give FILE, --case NAME, or both (FILE with a model case)")
+        raise InputError("give FILE, --case NAME|FILE, or both (FILE with a model case)")
     if file is not None:
-        if case is not None and case not in CASES:
-            raise InputError(f"--case {case!r} with FILE: the case must be a model "
-                             f"({', '.join(CASES)})")
+        if case is not None:
+            resolve_case(case)          # a model case: one line when unknown
         return (series_from_args(args) if args is not None else read_measured(file)), None
-    if case in MEASURED_DATA:
-        return read_measured(MEASURED_DATA[case]), None
     parts = case.split(":")
     if len(parts) == 3 and parts[0] == "synthetic":
         from cases.synthetic_series import generate_series, truth_of
@@ -89,8 +88,14 @@ def load(file: str | None, case: str | None, args=None):
         s = generate_series(parts[1], seed)
         return s.data, {"label": parts[1], "seed": seed, "causes": list(s.truth["causes"]),
                         "chi": s.truth["chi"], "out_of_catalogue": s.truth["ooc"]}
-    raise InputError(f"--case: unknown case {case!r}; use "
-                     f"{', '.join(MEASURED_DATA)} or synthetic:LABEL:SEED")
+    return read_measured(resolve_case(case).measured_data()), None
+
+
+def model_case(case: str | None):
+    """The :class:`cases.case.Case` of ``--case`` (None for none or a synthetic series)."""
+    if case is None or case.startswith("synthetic:"):
+        return None
+    return resolve_case(case)
 
 
 def _fmt(v) -> str:
@@ -207,8 +212,8 @@ def _backbone_prediction(args, data, mode) -> dict:
     """``--backbone``: the estimator's joint (method exact, all levels but the top three,
     B~ from the case's FE model) put into the FE model, every level read off its EPMC
     backbone (:func:`cases.backbone_prediction.predict_from_backbone`)."""
-    if args.case != "double-beam" or not args.files:
-        raise InputError("--backbone needs FILE and --case double-beam")
+    if args.case is None or not args.files:
+        raise InputError("--backbone needs FILE and --case")
     from cases.backbone_prediction import predict_from_backbone
     from cases.registry import build_case
     from inverse.estimate import estimate
@@ -231,12 +236,15 @@ def run(args) -> int:
     result = diagnose(data, mode=args.mode)
     if truth is not None:
         result["synthetic_truth"] = truth
-    if args.case in CASES:  # a model case: its FE-level check
+    case = model_case(args.case)
+    if case is not None and "fe_check" in case.capabilities:  # its FE-level check
         level1 = data.for_mode(result["mode"])
-        result["fe_check"] = fe_check(args.case, float(level1.omega2[0]))
-    if args.case == "double-beam":  # the FE model refitted, base vs extended (issue 13)
+        result["fe_check"] = case.builders["fe_check"](float(level1.omega2[0]))
+    if case is not None and "fe_levels" in case.capabilities:
+        # the FE model refitted, base vs extended (issue 13), by the one judge
         from cases.double_beam.fe_diagnosis_report import add_fe_diagnosis
-        add_fe_diagnosis(result, data, out=args.out)
+        add_fe_diagnosis(result, data, out=args.out, levels=case.builders["fe_levels"],
+                         model_key=case.source)
     if args.backbone:
         result["backbone"] = _backbone_prediction(args, data, result["mode"])
     if args.out:

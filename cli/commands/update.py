@@ -1,7 +1,8 @@
 """``iwanfe update``: the FE model's joint, damping and frequency fitted to measured levels.
 
-Parses, calls :func:`cases.double_beam.update_study.run_update`, prints
-(:mod:`cases.double_beam.update_report`).
+Parses, asks the case (:func:`cases.registry.resolve_case`) for its ``update``
+capability (:func:`cases.double_beam.update_study.run_update` on its FE-levels model),
+prints (:mod:`cases.double_beam.update_report`).
 """
 from __future__ import annotations
 
@@ -28,8 +29,8 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         NAME, help="fit the FE model's glue joint, damping and frequency to measured levels",
         description=(
-            "Model updating by the nonlinear FE simulation itself: the double beam with one "
-            "four-parameter Iwan element per glue node (first-harmonic balance, exact "
+            "Model updating by the nonlinear FE simulation itself: the case's FE model with "
+            "one four-parameter Iwan element per joint node (first-harmonic balance, exact "
             "describing function, phase resonance of the measured mode) fitted to omega^2 "
             "and zeta of the fit levels: chi, the glue's modal damping at level 1 (R~), the "
             "viscous damping and the stuck frequency, plus the FE realization of the cause "
@@ -40,12 +41,15 @@ def register(subparsers) -> None:
             "bound), the misfit, and how the held-out predictions move with the "
             "undetermined ones."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--case", required=True, choices=("double-beam",),
-                        help="the FE model")
+    parser.add_argument("--case", required=True, metavar="NAME|FILE",
+                        help="the FE model: a shipped case or a case file (.toml) whose "
+                             "joints are iwan4 and which names its measured data")
     parser.add_argument("--data", metavar="FILE", default=None,
-                        help="measured-data CSV (default: the shipped paper data)")
-    parser.add_argument("--mode", type=int, default=2, help="mode label in the data")
-    parser.add_argument("--fit-levels", default="1-7", help="levels fitted (others predicted)")
+                        help="measured-data CSV (default: the case's measured data)")
+    parser.add_argument("--mode", type=int, default=None,
+                        help="mode label in the data (default: the case's)")
+    parser.add_argument("--fit-levels", default=None,
+                        help="levels fitted, others predicted (default: the case's)")
     parser.add_argument("--force-scale", type=_positive, default=1.0, metavar="N_PER_UNIT",
                         help="N per excitation unit (assumed; omega^2 and zeta do not depend "
                              "on it, R~ and phi_max do)")
@@ -66,14 +70,15 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     from cases.double_beam.update_report import format_text, summary, write_update
-    from cases.double_beam.update_study import UpdateSettings, run_update
+    from cases.registry import resolve_case
 
-    settings = UpdateSettings(data_path=args.data, mode_label=args.mode,
-                              fit_levels=args.fit_levels, force_scale=args.force_scale,
-                              profiles=args.profiles, assumptions=args.assumptions)
+    update = resolve_case(args.case).require("update")
     spec = executor_from_args(args)
     store = None if args.out is None else str(Path(args.out) / "profiles")
-    result = run_update(settings, executor=spec, progress=True, store=store)
+    result = update(executor=spec, progress=True, store=store, data_path=args.data,
+                    mode_label=args.mode, fit_levels=args.fit_levels,
+                    force_scale=args.force_scale, profiles=args.profiles,
+                    assumptions=args.assumptions)
     if args.out:
         write_update(result, args.out)
     s = summary(result)
