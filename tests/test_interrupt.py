@@ -94,7 +94,9 @@ def test_sigint_at_random_moments_of_a_campaign(tmp_path):
 
 def test_deferred_sigint_waits_for_the_safe_point():
     """Inside ``deferred`` a SIGINT is only recorded; the next checkpoint raises it, and
-    code between them (here: a compiled-code stand-in) finishes undisturbed."""
+    code between them (here: a compiled-code stand-in) finishes undisturbed. Uninstalling
+    restores whatever handler was there before (SIG_IGN in a background job)."""
+    before = signal.getsignal(signal.SIGINT)
     interrupt.install()
     try:
         done = []
@@ -119,7 +121,7 @@ def test_deferred_sigint_waits_for_the_safe_point():
         assert done[-1] == "finished"
     finally:
         interrupt.uninstall()
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.getsignal(signal.SIGINT) == before
 
 
 def test_second_sigint_is_not_deferred():
