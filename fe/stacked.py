@@ -95,8 +95,58 @@ _PAIR_KINDS = {"in_phase_bending": "in-phase bending", "out_of_phase_bending": "
                "in_phase_axial": "axial", "out_of_phase_axial": "out-of-phase axial"}
 
 
+class JointedStrips:
+    """What every assembled model of jointed strips offers, from its fields ``K``, ``M``
+    (free DOFs), ``free``, ``dofmaps``, ``slip_matrix`` and ``joint_stiffness``: modes,
+    free-to-full vectors, per-strip displacements, joint slips. Shared by
+    :class:`StackedModel` and the double beam's Python model."""
+
+    @property
+    def n_free(self) -> int:
+        return int(self.free.size)
+
+    @property
+    def n_dofs(self) -> int:
+        return int(self.dofmaps[-1].stop)
+
+    def modes(self, n_modes: int):
+        """Lowest ``n_modes`` modes: (omega rad/s (n,), mass-normalized shapes (n_free, n))."""
+        return normal_modes(self.K, self.M, min(int(n_modes), self.n_free - 2))
+
+    def modes_below(self, f_max_hz: float, start: int = 12):
+        """All modes with frequency <= ``f_max_hz`` (plus one above, to bracket)."""
+        n = start
+        while True:
+            omega, shapes = self.modes(n)
+            if omega[-1] > 2 * np.pi * f_max_hz or n >= self.n_free - 2:
+                return omega, shapes
+            n *= 2
+
+    def full_vector(self, shape: np.ndarray) -> np.ndarray:
+        """Free-DOF vector(s) to all DOFs (zeros at the supports)."""
+        return expand(shape, self.free, self.n_dofs)
+
+    def strip_displacements(self, shape: np.ndarray) -> list[dict]:
+        """Per strip ``dict(u=, w=, theta=)`` at all its nodes (supported ones included),
+        m, rad."""
+        full = self.full_vector(np.asarray(shape))
+        return [{"u": dm.component(full, U), "w": dm.component(full, W),
+                 "theta": dm.component(full, THETA)} for dm in self.dofmaps]
+
+    def glue_slip_participation(self, shape: np.ndarray) -> float:
+        """``sum_j k_j s_j^2 / (phi^T K phi)``: the share of the mode's strain energy in the
+        joints' stuck springs, ``d ln(omega^2) / d ln(K_T)`` for a mode (Rayleigh)."""
+        shape = np.asarray(shape, dtype=float)
+        s = self.slip_matrix @ shape
+        return float(np.sum(self.joint_stiffness * s**2) / (shape @ (self.K @ shape)))
+
+    def joint_slips(self, shape: np.ndarray) -> np.ndarray:
+        """Tangential slip at each joint for a free-DOF vector, m."""
+        return self.slip_matrix @ np.asarray(shape)
+
+
 @dataclass
-class StackedModel:
+class StackedModel(JointedStrips):
     """Assembled linear model of stacked strips over the free DOFs (joints stuck).
 
     ``K = K_without_joints + slip_matrix^T diag(joint_stiffness) slip_matrix`` (N/m);
@@ -126,14 +176,6 @@ class StackedModel:
     point_mass: float = 0.0
 
     @property
-    def n_free(self) -> int:
-        return int(self.free.size)
-
-    @property
-    def n_dofs(self) -> int:
-        return int(self.dofmaps[-1].stop)
-
-    @property
     def strips(self) -> list[StripGeometry]:
         """Drawing geometry (:mod:`viz`): each strip at its reference line with its
         thickest section (a notched end is drawn full)."""
@@ -145,29 +187,6 @@ class StackedModel:
         """Total mass (kg): strips (free and supported parts) plus point masses."""
         return float(sum(np.sum(s.rhoA * np.diff(s.x)) for s in self.strip_meshes)
                      + self.point_mass)
-
-    def modes(self, n_modes: int):
-        """Lowest ``n_modes`` modes: (omega rad/s (n,), mass-normalized shapes (n_free, n))."""
-        return normal_modes(self.K, self.M, min(int(n_modes), self.n_free - 2))
-
-    def modes_below(self, f_max_hz: float, start: int = 12):
-        """All modes with frequency <= ``f_max_hz`` (plus one above, to bracket)."""
-        n = start
-        while True:
-            omega, shapes = self.modes(n)
-            if omega[-1] > 2 * np.pi * f_max_hz or n >= self.n_free - 2:
-                return omega, shapes
-            n *= 2
-
-    def full_vector(self, shape: np.ndarray) -> np.ndarray:
-        """Free-DOF vector(s) to all DOFs (zeros at the supports)."""
-        return expand(shape, self.free, self.n_dofs)
-
-    def strip_displacements(self, shape: np.ndarray) -> list[dict]:
-        """Per strip ``dict(u=, w=, theta=)`` at all its nodes, m, rad."""
-        full = self.full_vector(np.asarray(shape))
-        return [{"u": dm.component(full, U), "w": dm.component(full, W),
-                 "theta": dm.component(full, THETA)} for dm in self.dofmaps]
 
     def _identical_pair(self) -> bool:
         if len(self.strip_meshes) != 2:
@@ -191,17 +210,6 @@ class StackedModel:
         va, vt = np.where(axial, full, 0.0), np.where(axial, 0.0, full)
         Ms = self.strip_mass_matrix
         return "axial" if va @ (Ms @ va) > vt @ (Ms @ vt) else "bending"
-
-    def glue_slip_participation(self, shape: np.ndarray) -> float:
-        """``sum_j k_j s_j^2 / (phi^T K phi)``: the share of the mode's strain energy in the
-        joints' stuck springs, ``d ln(omega^2) / d ln(K_T)`` for a mode (Rayleigh)."""
-        shape = np.asarray(shape, dtype=float)
-        s = self.slip_matrix @ shape
-        return float(np.sum(self.joint_stiffness * s**2) / (shape @ (self.K @ shape)))
-
-    def joint_slips(self, shape: np.ndarray) -> np.ndarray:
-        """Tangential slip at each joint for a free-DOF vector, m."""
-        return self.slip_matrix @ np.asarray(shape)
 
     def bending_order(self, omega: np.ndarray, shapes: np.ndarray) -> np.ndarray:
         """1-based order of each mode among the (in-phase) bending elastic modes, 0 for

@@ -59,18 +59,17 @@ import scipy.sparse as sp
 from fe.assembly import (
     assemble,
     coupling_stiffness,
-    expand,
     free_dofs,
     free_index,
     point_masses,
     restrict,
     restrict_columns,
 )
-from fe.beam import THETA, U, W, Section, frame_mass, frame_stiffness
+from fe.beam import U, W, Section, frame_mass, frame_stiffness
 from fe.interface import (normal_gap_rows, stacked_energy_split, stacked_strips,
                           tangential_slip_rows)
 from fe.mesh import DofMap, LineMesh, line_mesh, mesh_with_element_size
-from fe.modal import normal_modes
+from fe.stacked import JointedStrips
 
 MEASURED_FREQUENCY_HZ = 252.0  # sqrt(2.50677e6) / (2 pi), paper Table 4, experiment 1
 MATCH_TOLERANCE = 0.005  # relative, for "matches_measured"
@@ -148,7 +147,7 @@ class DoubleBeamConfig:
 
 
 @dataclass
-class DoubleBeamModel:
+class DoubleBeamModel(JointedStrips):
     """Assembled linear model over the free DOFs (the clamp removed).
 
     Attributes
@@ -189,37 +188,6 @@ class DoubleBeamModel:
     strips: list
     _strip_mass: sp.csr_matrix = field(repr=False)
 
-    @property
-    def n_free(self) -> int:
-        return int(self.free.size)
-
-    @property
-    def n_dofs(self) -> int:
-        return int(self.dofmaps[-1].stop)
-
-    def modes(self, n_modes: int):
-        """Lowest ``n_modes`` modes: (omega rad/s (n,), mass-normalized shapes (n_free, n))."""
-        return normal_modes(self.K, self.M, min(int(n_modes), self.n_free - 2))
-
-    def modes_below(self, f_max_hz: float, start: int = 12):
-        """All modes with frequency <= ``f_max_hz`` (plus one above, to bracket)."""
-        n = start
-        while True:
-            omega, shapes = self.modes(n)
-            if omega[-1] > 2 * np.pi * f_max_hz or n >= self.n_free - 2:
-                return omega, shapes
-            n *= 2
-
-    def full_vector(self, shape: np.ndarray) -> np.ndarray:
-        """Free-DOF vector(s) to all DOFs (zeros at the clamp)."""
-        return expand(shape, self.free, self.n_dofs)
-
-    def strip_displacements(self, shape: np.ndarray) -> list[dict]:
-        """Per strip ``dict(u=, w=, theta=)`` at all nodes (clamped ones included), m, rad."""
-        full = self.full_vector(np.asarray(shape))
-        return [{"u": dm.component(full, U), "w": dm.component(full, W),
-                 "theta": dm.component(full, THETA)} for dm in self.dofmaps]
-
     def energy_split(self, shape: np.ndarray) -> dict:
         """Kinetic-energy fractions of a shape in the strips' own mass (point masses
         excluded): :func:`fe.interface.stacked_energy_split` of the two strips."""
@@ -238,22 +206,6 @@ class DoubleBeamModel:
                  "in_phase_axial": "axial",
                  "out_of_phase_axial": "out-of-phase axial"}
         return names[max(split, key=split.get)]
-
-    def glue_slip_participation(self, shape: np.ndarray) -> float:
-        """Fraction of the shape's strain energy in the tangential joint springs.
-
-        ``sum_j k_j s_j^2 / (phi^T K phi)`` with ``s = slip_matrix phi``; for a mode this
-        equals ``d ln(omega^2) / d ln(K_T)`` (Rayleigh quotient), the relative frequency
-        sensitivity to the stuck glue stiffness, i.e. how strongly an Iwan joint there
-        can soften the mode. Dimensionless, in [0, 1].
-        """
-        shape = np.asarray(shape, dtype=float)
-        s = self.slip_matrix @ shape
-        return float(np.sum(self.joint_stiffness * s**2) / (shape @ (self.K @ shape)))
-
-    def joint_slips(self, shape: np.ndarray) -> np.ndarray:
-        """Tangential slip at each joint for a free-DOF vector, m."""
-        return self.slip_matrix @ np.asarray(shape)
 
     def bending_order(self, omega: np.ndarray, shapes: np.ndarray) -> np.ndarray:
         """1-based order of each mode among the in-phase bending modes (0 for others)."""
