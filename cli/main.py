@@ -93,7 +93,12 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}".splitlines()[0] + "\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv=None) -> argparse.ArgumentParser:
+    """The ``iwanfe`` parser. When ``argv`` starts with a command's name only that
+    command's module is imported (a command starts without importing every other one's
+    dependencies); otherwise (``--help``, a typo) every command is registered."""
+    first = next((a for a in (argv or []) if not a.startswith("-")), None)
+    names = [first] if first in COMMANDS else COMMANDS
     parser = _Parser(
         prog="iwanfe",
         description=(
@@ -103,7 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name in COMMANDS:
+    for name in names:
         try:
             module = importlib.import_module(f"cli.commands.{name}")
         except ModuleNotFoundError as exc:  # command not built yet
@@ -156,7 +161,8 @@ def input_fault(exc: BaseException) -> bool:
 
 def _run(argv) -> int:
     """Parse ``argv`` and run the chosen command."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
