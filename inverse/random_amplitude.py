@@ -50,8 +50,29 @@ from scipy import integrate, special
 from joints.describing import describing_function, kappa1, kappa2_exact
 from joints.iwan import IwanParameters
 
-__all__ = ["rayleigh_factor", "equivalent_sine_amplitude", "rayleigh_micro_slip",
+__all__ = ["rayleigh_nodes", "rayleigh_factor", "equivalent_sine_amplitude", "rayleigh_micro_slip",
            "rayleigh_describing_function", "sine_equivalent_kappa1_B"]
+
+
+def rayleigh_nodes(n: int = 8, min_weight: float = 0.0):
+    """Quadrature of the energy-weighted expectation (eq. 1) over a Rayleigh envelope:
+    amplitudes ``A_j = x_j rms`` and weights ``w_j`` (sum 1) with
+    ``E[A^2 g(A)] / E[A^2] ~ sum_j w_j g(x_j rms)``. With ``u = A^2 / (2 rms^2)`` the
+    weight is ``u e^-u du`` (:func:`rayleigh_describing_function`): Gauss-Laguerre
+    nodes ``u_j`` of ``alpha = 1``, ``x_j = sqrt(2 u_j)``. Micro slip (``g = u^s``,
+    ``0 < s < 1/2``): relative error 8e-4 at n = 8, 2e-4 at n = 16 (the power is not a
+    polynomial at 0). Nodes of weight below ``min_weight`` are dropped and the rest
+    renormalized (an error below the dropped weight: the far tail, deep in macro slip,
+    costs most to simulate and weighs least).
+
+    Returns
+    -------
+    x : (n,) amplitude over RMS; w : (n,) weights.
+    """
+    u, w = special.roots_genlaguerre(int(n), 1.0)
+    w = w / w.sum()
+    keep = w >= min_weight
+    return np.sqrt(2.0 * u[keep]), w[keep] / w[keep].sum()
 
 
 def rayleigh_factor(chi):

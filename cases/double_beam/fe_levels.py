@@ -53,19 +53,30 @@ from cases.double_beam.joint_setup import phi_max_of
 from cases.double_beam.model import DoubleBeamConfig, build_double_beam
 from fe.beam import W
 from fe.hb_resonance import resonance_levels
+from fe.hb_response import response_levels
 from fe.reduction import JointedSystem, reduced_basis
 from inverse.fe_reference import joint_slip_at_resonance, pick_fe_mode
 from inverse.iwan_modal import b_tilde, r_tilde
+from inverse.random_amplitude import rayleigh_nodes
 from joints.iwan import IwanParameters
 
 __all__ = ["BASE_PARAMETERS", "DEFAULT_KT", "LinearPart", "LevelPrediction",
-           "DoubleBeamLevels", "Simulator", "level_entries"]
+           "DoubleBeamLevels", "Simulator", "level_entries", "abscissa_of",
+           "rayleigh_expectation"]
 
 #: The base model's parameters, in the order the fits use.
 BASE_PARAMETERS = ("chi", "ln_dc1", "zeta_v", "f0_hz")
 #: K_T (N/m) of the shipped case (an assumption, :mod:`cases.double_beam.model`).
 DEFAULT_KT = DoubleBeamConfig().glue_tangential_stiffness
 N_MODES = 40
+#: How a level is simulated (class docstring).
+ABSCISSAE = ("force", "response", "random")
+#: Gauss-Laguerre nodes of a random level's Rayleigh expectation (1e-3 relative on the
+#: joint's part of omega^2 and zeta in micro slip; :func:`inverse.random_amplitude.
+#: rayleigh_nodes`).
+RAYLEIGH_NODES = 8
+#: Nodes lighter than this are dropped (the two beyond 4.9 RMS: weight 3.4e-6 together).
+RAYLEIGH_MIN_WEIGHT = 1e-6
 
 
 @dataclass
@@ -132,6 +143,13 @@ class DoubleBeamLevels:
         reference of ``ln_dc1``, module docstring).
     force_scale : float, N per excitation unit.
     config : DoubleBeamConfig, optional (default: the shipped case).
+    abscissa : ``force`` (each level at its force), ``response`` (each level at its
+        response amplitude: response control, free decay) or ``random`` (the Rayleigh
+        expectation at each level's response RMS); see :data:`ABSCISSAE`.
+    response_amplitude : (L,) the held response amplitude (``response``) or response
+        RMS (``random``) at the case's response point, in any unit proportional to
+        displacement (omega^2 and zeta are invariant to it; the air-drag and cubic
+        causes read it as metres).
     """
 
     #: K_T (N/m) when a parameter set has no ``log10_kt`` (assumed)
@@ -141,7 +159,17 @@ class DoubleBeamLevels:
 
     def __init__(self, excitation, run_order, omega2_1: float, zeta_1: float,
                  force_scale: float = 1.0, config: DoubleBeamConfig | None = None,
-                 n_modes: int = N_MODES):
+                 n_modes: int = N_MODES, abscissa: str = "force",
+                 response_amplitude=None):
+        if abscissa not in ABSCISSAE:
+            raise ValueError(f"abscissa must be one of {ABSCISSAE}, got {abscissa!r}")
+        self.abscissa = abscissa
+        self.response_amplitude = None if response_amplitude is None else \
+            np.asarray(response_amplitude, dtype=float)
+        if abscissa != "force" and (self.response_amplitude is None or np.any(
+                ~(self.response_amplitude > 0)) or np.any(~np.isfinite(self.response_amplitude))):
+            raise ValueError(f"the {abscissa} route needs a positive response_amplitude "
+                             "at every level")
         self.excitation = np.asarray(excitation, dtype=float)
         self.run_order = np.asarray(run_order, dtype=float)
         self.omega_1 = math.sqrt(float(omega2_1))
@@ -158,12 +186,15 @@ class DoubleBeamLevels:
 
     @classmethod
     def from_data(cls, data, **kw) -> "DoubleBeamLevels":
-        """From a one-mode :class:`ident.modal_data.MeasuredData` (levels sorted)."""
-        return cls(data.excitation, data.run_order, data.omega2[0], data.zeta[0], **kw)
+        """From a one-mode :class:`ident.modal_data.MeasuredData` (levels sorted): the
+        route its test calls for (:func:`abscissa_of`)."""
+        return cls(data.excitation, data.run_order, data.omega2[0], data.zeta[0],
+                   abscissa=abscissa_of(data), response_amplitude=data.response_amplitude,
+                   **kw)
 
     @property
     def n_levels(self) -> int:
-        return self.excitation.size
+        return self.run_order.size
 
     def linear(self, K_T: float) -> LinearPart:
         """The calibrated reduced model at glue stiffness ``K_T`` (cached)."""
@@ -201,14 +232,19 @@ class DoubleBeamLevels:
         k = int(np.argmax(np.abs(red.basis.T @ (model.M @ phi))))
         f = np.zeros(n)
         f[int(model.drive_dof)] = 1.0
-        slips1 = joint_slip_at_resonance(model.M, model.K, model.slip_matrix,
-                                         f * self.force_scale * self.excitation[0],
-                                         float(omega[fe_mode - 1]), self.zeta_1)
+        gphi = np.asarray(model.slip_matrix @ phi).ravel()
+        if self.abscissa == "force":
+            slips1 = joint_slip_at_resonance(model.M, model.K, model.slip_matrix,
+                                             f * self.force_scale * self.excitation[0],
+                                             float(omega[fe_mode - 1]), self.zeta_1)
+        else:     # the mode's slips at the level-1 response amplitude (or RMS)
+            slips1 = np.abs(gphi) * self.response_amplitude[0] \
+                / abs(phi[int(model.response_dof)])
         kj = np.asarray(model.joint_stiffness, dtype=float)
         sign = np.sign(red.basis[:, k] @ (model.M @ phi))
         return LinearPart(K_T=K_T, grip=grip, red=red, k=k, omega_k=float(red.omega[k]),
                           load=red.load(f), shares=kj / kj.sum(),
-                          gphi=np.asarray(model.slip_matrix @ phi).ravel(), slips1=slips1,
+                          gphi=gphi, slips1=slips1,
                           lambda3=lambda3(phi), phi_drive=float(sign * phi[int(model.drive_dof)]),
                           width=width, response_row=red.basis[int(model.response_dof)].copy())
 
@@ -256,14 +292,56 @@ class DoubleBeamLevels:
         j, red, scale, forces, elements = self.setup(p, extension)
         lin = j["linear"]
         key = (round(math.log10(j["K_T"]), 9), getattr(extension, "cause", None))
-        res = resonance_levels(red, j["params"], lin.load, forces, lin.k, scale=scale,
-                               elements=elements, guess=self._warm.get(key))
+        warm = self._warm.get(key)
+        if self.abscissa == "force":
+            res = resonance_levels(red, j["params"], lin.load, forces, lin.k, scale=scale,
+                                   elements=elements, guess=warm)
+        else:
+            amp, n = self.response_amplitude, 1
+            if self.abscissa == "random":      # each level at the Rayleigh nodes
+                factor, weight = rayleigh_nodes(RAYLEIGH_NODES, RAYLEIGH_MIN_WEIGHT)
+                n = factor.size
+                amp, scale = np.outer(amp, factor).ravel(), np.repeat(scale, n)
+            res = response_levels(red, j["params"], lin.load, amp, lin.response_row, lin.k,
+                                  scale=scale, elements=elements, guess=warm)
         self._warm[key] = res
+        omega2, zeta = res.omega2, res.zeta
+        slip, modal = res.slip_amplitude.max(axis=1), np.abs(res.q[:, lin.k])
+        if self.abscissa == "random":
+            omega2, zeta = rayleigh_expectation(omega2.reshape(-1, n), zeta.reshape(-1, n),
+                                                weight)
+            slip, modal = slip.reshape(-1, n).max(axis=1), modal.reshape(-1, n) @ weight
         joint = {k: v for k, v in j.items() if k not in ("params", "linear")}
         joint["grip"] = lin.grip
-        return LevelPrediction(omega2=res.omega2, zeta=res.zeta,
-                               slip_over_phi_max=res.slip_amplitude.max(axis=1) / j["phi_max"],
-                               joint=joint, modal_amplitude=np.abs(res.q[:, lin.k]))
+        return LevelPrediction(omega2=omega2, zeta=zeta, slip_over_phi_max=slip / j["phi_max"],
+                               joint=joint, modal_amplitude=modal)
+
+
+def abscissa_of(data) -> str:
+    """The route of :class:`DoubleBeamLevels` a one-mode series calls for: ``random``
+    for ``test = random``, ``response`` for a free decay or response control, else
+    ``force``. One line (ValueError) for what no route models."""
+    test = set(map(str, data.test))
+    if len(test) > 1:
+        raise ValueError(f"{data.source}: one test type per series, got {sorted(test)}")
+    if test == {"random"}:
+        return "random"
+    if test == {"free-decay"} or data.response_controlled:
+        return "response"
+    if test == {"stepped-sine"} and np.all(data.control == "force"):
+        return "force"
+    raise ValueError(f"{data.source}: levels with mixed control "
+                     f"({sorted(set(map(str, data.control)))}) have no FE route")
+
+
+def rayleigh_expectation(omega2, zeta, weight):
+    """The H1 (statistical-linearization) omega^2 and zeta of a random level from the
+    sine values at its Rayleigh nodes (``(L, n)`` each, weights ``(n,)`` of
+    :func:`inverse.random_amplitude.rayleigh_nodes`): the energy-weighted expectations
+    of the modal in-phase stiffness ``omega^2`` and quadrature stiffness ``2 zeta
+    omega^2`` (eq. 1 of :mod:`inverse.random_amplitude`)."""
+    o2 = omega2 @ weight
+    return o2, ((2.0 * zeta * omega2) @ weight) / (2.0 * o2)
 
 
 @dataclass

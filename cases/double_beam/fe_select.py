@@ -95,7 +95,7 @@ class Headline:
 def fe_noise(data):
     """(judge noise, :class:`inverse.update.NoiseModel` of its totals) of one mode's
     levels (module docstring)."""
-    x = np.asarray(data.response_amplitude, float) if data.response_controlled else \
+    x = np.asarray(data.response_amplitude, float) if data.response_abscissa else \
         data.excitation / (data.zeta * data.omega2)
     jn = judge.noise_model(x, {"omega2": data.omega2, "zeta": data.zeta},
                            {"omega2": data.omega2_std, "zeta": data.zeta_std},

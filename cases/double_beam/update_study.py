@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cases.double_beam.fe_causes import MacroSlip
-from cases.double_beam.fe_levels import BASE_PARAMETERS, DoubleBeamLevels
+from cases.double_beam.fe_levels import BASE_PARAMETERS, DoubleBeamLevels, abscissa_of
 from cases.double_beam.fe_select import Headline, chosen_model, fe_select
 from cases.double_beam.model import DoubleBeamConfig
 from cases.double_beam.settings import DEFAULT_DATA
@@ -86,10 +86,7 @@ class UpdateSettings:
 def load_levels(settings: UpdateSettings):
     """The measured levels and the fit mask."""
     data = read_measured(settings.data_path or DEFAULT_DATA).for_mode(settings.mode_label)
-    if data.test[0] != "stepped-sine":
-        raise ValueError(f"{data.source}: test = {data.test[0]}: update simulates the "
-                         "stepped-sine levels of the double beam at their force; fit "
-                         f"{data.test[0]} rows with `iwanfe estimate` or `iwanfe diagnose`")
+    abscissa_of(data)                      # a series no FE route models: one line
     if len(data) < 5:
         raise ValueError(f"mode {settings.mode_label}: {len(data)} levels in the data, "
                          f"need at least 5")
