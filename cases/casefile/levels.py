@@ -31,7 +31,7 @@ import numpy as np
 
 from cases.casefile.build import build_model
 from cases.casefile.calibrate import calibrate
-from cases.double_beam.fe_levels import DoubleBeamLevels
+from cases.double_beam.fe_levels import DoubleBeamLevels, abscissa_of
 
 __all__ = ["total_kt", "CaseLevels"]
 
@@ -69,6 +69,10 @@ class CaseLevels(DoubleBeamLevels):
 
     @classmethod
     def from_data(cls, data, cf=None, **kw) -> "CaseLevels":
+        route = abscissa_of(data)
+        if route != "force":     # the double beam's response routes are not checked here
+            raise ValueError(f"{data.source}: the FE loop of a case file simulates "
+                             f"force-controlled stepped sine; {route} rows are not supported")
         return cls(cf, data.excitation, data.run_order, data.omega2[0], data.zeta[0], **kw)
 
     def _build(self, K_T: float):

@@ -39,6 +39,13 @@ Parameters (SI units; how each enters):
 The force is ``force_scale * excitation`` (N/V, an assumption: every omega^2 and zeta
 is invariant to it, R~ scales as ``force_scale^-(chi+1)``,
 :mod:`cases.double_beam.joint_setup`).
+
+Rows whose abscissa is the response amplitude (free decay, response control) are
+simulated at that amplitude instead (``abscissa = response``: phase resonance with the
+force found, :func:`fe.hb_response.response_levels`, the EPMC backbone read there), and
+random rows by the Rayleigh expectation over their response RMS (``abscissa =
+random``, :func:`rayleigh_expectation`); ``ln_dc1`` then refers to the glue slips of the
+mode at level 1's response amplitude (or RMS).
 """
 from __future__ import annotations
 
