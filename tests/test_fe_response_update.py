@@ -77,8 +77,12 @@ def test_random_route_is_the_rayleigh_expectation_of_the_backbone():
 
 
 def test_route_of_a_series_and_one_line_for_what_has_none():
+    from cases.casefile.levels import CaseLevels
+
     fd = synth.series("free-decay", amplitudes=synth.AMPLITUDES[:5] + 0)
     assert abscissa_of(fd) == "response"
+    with pytest.raises(ValueError, match="response rows are not supported"):
+        CaseLevels.from_data(fd)             # the case-file loop: force control only
     fd.control[:] = "response"
     fd.test[:] = "stepped-sine"
     assert abscissa_of(fd) == "response"
