@@ -59,7 +59,8 @@ class ResponseLevels(ResonanceLevels):
 
 def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
                     mode_index: int, scale=None, elements=(), tol: float = 1e-10,
-                    max_steps: int = 8, max_newton: int = 100, guess: ResponseLevels | None = None) -> ResponseLevels:
+                    max_steps: int = 8, max_newton: int = 100,
+                    guess: ResponseLevels | None = None) -> ResponseLevels:
     """Phase resonance of basis vector ``mode_index`` at each held response amplitude
     (module docstring).
 
@@ -71,6 +72,8 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
     response_row : (r,) the basis row of the response DOF (``x = response_row . q``).
     tol : float
         Bound on ``|ln(|x| / A)|`` and on ``|Re D_k| / w^2`` (Newton: ``tol / 100``).
+    max_steps : int
+        Newton steps on ``(ln w, ln F)`` before the fallback takes the levels left.
     guess : ResponseLevels, optional
         A previous solution with the same number of levels and elements.
 
@@ -90,8 +93,8 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
         and guess.element_amplitude.shape[1] == b.ny - b.nj
     if warm:
         ratio = A / np.abs(guess.response)
-        w, lnF = guess.omega.copy(), np.log(guess.force * ratio)
         F0 = guess.force * ratio
+        w, lnF = guess.omega.copy(), np.log(F0)
         Y = np.concatenate([guess.slip, guess.element_harmonics], axis=1) * ratio[:, None]
     else:     # the phase resonance at the linear mode's force for |x| = A
         w = np.sqrt(b.a * b.k[k])

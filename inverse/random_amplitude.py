@@ -50,8 +50,8 @@ from scipy import integrate, special
 from joints.describing import describing_function, kappa1, kappa2_exact
 from joints.iwan import IwanParameters
 
-__all__ = ["rayleigh_nodes", "rayleigh_factor", "equivalent_sine_amplitude", "rayleigh_micro_slip",
-           "rayleigh_describing_function", "sine_equivalent_kappa1_B"]
+__all__ = ["rayleigh_nodes", "rayleigh_factor", "equivalent_sine_amplitude",
+           "rayleigh_micro_slip", "rayleigh_describing_function", "sine_equivalent_kappa1_B"]
 
 
 def rayleigh_nodes(n: int = 8, min_weight: float = 0.0):
