@@ -49,7 +49,8 @@ def _tie_statement(data, mask) -> dict:
                      f"({d_om2:.1f} rad^2/s^2) is {ratio:.2f} times the damping growth "
                      f"2 omega^2 dzeta ({d_c:.1f} rad^2/s^2); every micro-slip Iwan joint "
                      f"needs at least kappa2/|kappa1| = 3 pi/4 = {TIE_MINIMUM:.3f} "
-                     f"(the measured frequency drops {TIE_MINIMUM / ratio:.1f}x too little)"
+                     + (f"(the measured frequency drops {TIE_MINIMUM / ratio:.1f}x too little)"
+                        if ratio < TIE_MINIMUM else "(the data respect the tie)")
                      if ratio > 0 else "the measured omega^2 does not fall over the fit levels")}
 
 
