@@ -11,6 +11,7 @@ import numpy as np
 from scipy import special
 
 from inverse.iwan_modal import kappa1_per_R, kappa_ratio
+from joints.describing import slider_in_phase
 
 ID = "macro-slip"
 ORDER = 10
@@ -24,12 +25,6 @@ EFFECT = None
 REPLACES_JOINT = True
 #: Slot for the FE realization (filled by the FE level).
 FE_REALIZATION = None
-
-
-def _slider_in_phase(t):
-    """In-phase describing function of a unit Jenkins element, ``t = phi/A`` in [0, 1]:
-    ``I_t(3/2, 3/2)`` (1 when stuck)."""
-    return special.betainc(1.5, 1.5, np.clip(t, 0.0, 1.0))
 
 
 def slip_shapes(x, chi):
@@ -52,7 +47,7 @@ def slip_shapes(x, chi):
     x, chi = np.broadcast_arrays(np.asarray(x, float), np.asarray(chi, float))
     p = chi + 1.0
     rho = np.minimum(1.0, 1.0 / x)
-    g = np.where(x > 1.0, _slider_in_phase(rho), 1.0)
+    g = np.where(x > 1.0, slider_in_phase(rho), 1.0)
     a, b = chi + 2.5, 1.5
     inc = special.betainc(a, b, rho) * special.beta(a, b)
     P2 = (1.0 - g + 8.0 / np.pi * x**p * inc) / p
