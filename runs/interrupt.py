@@ -37,10 +37,24 @@ _state = {"installed": False, "previous": None, "pending": False, "requested": F
           "depth": 0, "quiet": False}
 
 
+def _in_import(frame) -> bool:
+    """Whether ``frame`` (or a caller) runs in the import machinery: a KeyboardInterrupt
+    raised there (e.g. in a module lock's weakref callback) is printed as "Exception
+    ignored" and lost, so the request waits for the next safe point instead."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _on_sigint(signum, frame):
     """The SIGINT handler of :func:`install` (runs in the main thread)."""
     _state["requested"] = True
     if _state["quiet"]:
+        return
+    if _in_import(frame):
+        _state["pending"] = True
         return
     if _state["depth"] > 0 and not _state["pending"]:
         _state["pending"] = True
