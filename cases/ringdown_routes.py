@@ -34,7 +34,7 @@ ZETA_TARGET = 0.02
 #: The analysed part of a simulated record (:func:`identify_record`) and its rows.
 ANALYSED_FLOOR = 1e-2
 TAIL_PERIODS = 10
-ROWS = 16
+ROWS = 40
 
 
 def identify_record(path, mode_hz: float, floor: float = ANALYSED_FLOOR,
@@ -92,7 +92,8 @@ def compare_ringdown(case, ident: dict, start_amplitude: float, lo: float = 0.05
 
     Returns
     -------
-    dict with ``rows`` (ring-down rows in the window with the backbone's values and the
+    dict with ``rows`` (ring-down rows in the window and the nearest one beyond each of
+    its ends, so that they bracket it, with the backbone's values and the
     deviations), ``response`` (the virtual test's levels likewise), ``max_deviation``,
     ``targets`` and ``met``.
     """
@@ -100,6 +101,10 @@ def compare_ringdown(case, ident: dict, start_amplitude: float, lo: float = 0.05
     f_rd = np.asarray(ident["frequency_hz"], dtype=float)
     z_rd = np.asarray(ident["zeta"], dtype=float)
     win = (amp >= lo * start_amplitude) & (amp <= hi * start_amplitude)
+    for beyond, nearest in ((amp > hi * start_amplitude, np.argmin),
+                            (amp < lo * start_amplitude, np.argmax)):
+        if beyond.any():        # the nearest row outside: the compared rows bracket the window
+            win[np.flatnonzero(beyond)[nearest(amp[beyond])]] = True
     if win.sum() < 2:
         raise ValueError(f"the identified record has fewer than 2 rows between {lo:g} and "
                          f"{hi:g} x the start amplitude")

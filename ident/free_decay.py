@@ -6,18 +6,21 @@
    with several points a modal filter: the band-passed records' first singular vector
    is the mode's shape, their projection on it the modal coordinate, shown at the
    reference point.
-2. End effects. An FFT Hilbert transform sees the record as periodic: the jump from
-   the decayed end to the full start leaks into the analytic signal with an error
-   falling only as 1/(cycles from the edge) (measured: 1 % in the damping 50 cycles
-   in). So the record is cut at the mode's first and last extremum after the filter's
-   start-up (its impulse response down to 5 %: :func:`settle_time`) and reflected
-   evenly about them (the mode is symmetric about its extremum, up to half a sample),
-   filtered and transformed extended, and cut back. What is left of the end effects is
-   the kink of the envelope at the reflection (spread over +-1 period by the moving
-   averages of step 3); :data:`EDGE_PERIODS` periods are trimmed at both ends. Trim per
-   end = filter start-up + up to half a period + 2 periods, stated in the result
-   (about 7.5 cycles with the default band). Amplitudes are divided by the band-pass
-   gain at the row's frequency.
+2. End effects. Filtering and the FFT Hilbert transform both see the record's ends:
+   the band-pass starts up (rings at its band edges), and the transform treats the
+   record as periodic (the jump from the decayed end to the full start leaks into the
+   analytic signal with an error falling only as 1/(cycles from the edge)). So the
+   record is first continued beyond both ends by linear prediction
+   (:func:`continue_record`: the least-squares predictor of order
+   :data:`PREDICTOR_ORDER` fitted on :data:`PREDICTOR_PERIODS` periods at that end, a
+   sum of damped sinusoids carrying the mode, the other modes and slow trends across
+   the junction), then filtered and transformed, and cut back. Only the half-width of
+   the envelope smoothing of step 3 is trimmed: :data:`EDGE_PERIODS` period at each
+   end, stated in the result. Measured on the FE double beam's mode 4 (1.3 % damping),
+   the row 1-4 cycles after the start is within 3e-5 in frequency of the backbone when
+   the record starts at an extremum, 1.1e-4 when it starts at a zero crossing; on a
+   single-DOF Iwan decay within 4e-6 at any start phase. Amplitudes are divided by the
+   band-pass gain at the row's frequency.
 3. Hilbert (:func:`hilbert_track`): envelope ``a = |z|`` and phase ``theta =
    unwrap(arg z)``. The Hilbert envelope of a damped sinusoid ripples at twice its
    frequency (the negative-frequency half of its spectrum, relative amplitude about
@@ -48,11 +51,19 @@ from scipy import ndimage, signal
 
 BAND_HALF_WIDTH = 0.3
 FILTER_ORDER = 4
-#: Filter start-up: its impulse response down to this fraction of its peak (the first
-#: extremum of the mode is then located within 0.05/(2 pi) of a period).
+#: Filter start-up: its impulse response down to this fraction of its peak (the
+#: continuation beyond the record's ends is longer than this).
 SETTLE_FRACTION = 5e-2
-#: Periods trimmed at both ends after the reflection (the smoothed envelope kink).
-EDGE_PERIODS = 2
+#: Periods trimmed at both ends: the half-width of the two one-period moving averages.
+EDGE_PERIODS = 1
+#: The continuation beyond the ends (module doc, 2): predictor order, the periods at
+#: each end it is fitted on, periods continued beyond the filter start-up, and the
+#: largest growth of the backward continuation (a decay grows backwards in time; the
+#: forward one may not grow).
+PREDICTOR_ORDER = 16
+PREDICTOR_PERIODS = 8
+PAD_PERIODS = 4
+BACKWARD_GROWTH = 1e3
 MIN_CYCLES = 3
 DEFAULT_ROWS = 12
 
@@ -162,26 +173,41 @@ def isolate_mode(time_s, x, band_hz=None, reference=0) -> Isolated:
     else:
         weights = np.array([1.0])
     raw = x @ weights
-    y1 = y_all @ weights
     t_f = settle_time(sos, fs)
     period = int(round(fs / f_pk))
     i0 = int(np.ceil(t_f * fs))
-    ext = _extrema(y1)
-    ext = ext[(ext >= i0) & (ext <= t.size - 1 - i0)]
-    if ext.size < 2 * (2 * EDGE_PERIODS + MIN_CYCLES):
-        raise ValueError(f"record too short: {ext.size // 2} cycles of the mode at "
-                         f"{f_pk:.4g} Hz after the band-pass start-up ({t_f:.3g} s per end)")
-    i_s, i_e = int(ext[0]), int(ext[-1])
-    seg = raw[i_s:i_e + 1]
-    L = min(seg.size - 2, int(np.ceil(t_f * fs)) + 4 * period)
-    extended = np.concatenate([seg[L:0:-1], seg, seg[-2:-L - 2:-1]])
-    z = signal.hilbert(signal.sosfiltfilt(sos, extended))
     edge = EDGE_PERIODS * period
-    keep = slice(L + edge, L + seg.size - edge)
-    return Isolated(time_s=t[i_s:i_e + 1][edge:seg.size - edge],
-                    y=np.real(z[keep]), extended=z, keep=keep, band_hz=band, frequency_hz=f_pk,
-                    trim_s=((i_s + edge) / fs, (t.size - 1 - i_e + edge) / fs),
-                    sos=sos, shape=shape, notes=notes)
+    if t.size < 2 * edge + 2 * MIN_CYCLES * period:
+        raise ValueError(f"record too short: {t.size / period:.1f} cycles of the mode at "
+                         f"{f_pk:.4g} Hz; two rows of {MIN_CYCLES} cycles and the trimmed "
+                         f"{EDGE_PERIODS} at each end need {2 * (EDGE_PERIODS + MIN_CYCLES)}")
+    L = i0 + PAD_PERIODS * period
+    fit = min(max(PREDICTOR_PERIODS * period, 4 * PREDICTOR_ORDER), t.size // 2)
+    head = continue_record(raw[:fit][::-1], L, growth=BACKWARD_GROWTH)[::-1]
+    tail = continue_record(raw[-fit:], L, growth=1.0)
+    extended = signal.sosfiltfilt(sos, np.concatenate([head, raw, tail]))
+    z = signal.hilbert(extended)
+    keep = slice(L + edge, L + t.size - edge)
+    return Isolated(time_s=t[edge:t.size - edge], y=np.real(z[keep]), extended=z,
+                    keep=keep, band_hz=band, frequency_hz=f_pk,
+                    trim_s=(edge / fs, edge / fs), sos=sos, shape=shape, notes=notes)
+
+
+def continue_record(y, n, order=None, growth=1.0):
+    """The ``n`` samples that continue ``y`` (1-D, in time order) by its least-squares
+    linear predictor of ``order`` (forward linear prediction: a sum of damped sinusoids,
+    every mode and trend of the segment); fed a time-reversed segment it continues the
+    record backwards. The predictor's roots are held within ``growth ** (1 / n)`` in
+    modulus: the continuation grows at most ``growth`` times over its length."""
+    p = order or PREDICTOR_ORDER
+    win = np.lib.stride_tricks.sliding_window_view(y, p + 1)
+    c, *_ = np.linalg.lstsq(win[:, :-1][:, ::-1], win[:, -1], rcond=None)
+    r = np.roots(np.r_[1.0, -c])
+    cap = growth ** (1.0 / n)
+    r = np.where(np.abs(r) > cap, r / np.abs(r) * cap, r)
+    a = np.real(np.poly(r))
+    zi = signal.lfiltic([1.0], a, y=y[::-1][:p])
+    return signal.lfilter([1.0], a, np.zeros(n), zi=zi)[0]
 
 
 def _smooth(v, period):

@@ -30,7 +30,7 @@ import numpy as np
 from ident import decay_checks
 from ident.errors import InputError
 from ident.free_decay import (DEFAULT_ROWS, DecayTrack, Isolated, decay_bins, decay_rows,
-                              hilbert_track, isolate_mode)
+                              hilbert_track, isolate_mode, PREDICTOR_ORDER)
 from ident.modal_data import MeasuredData, annotation_warnings
 
 #: Disagreement thresholds of the two methods (module doc).
@@ -55,8 +55,10 @@ class FreeDecayResult:
         s, e = self.isolated.trim_s
         f = self.isolated.frequency_hz
         return (f"end effects trimmed: {s:.4g} s ({s * f:.1f} cycles) at the start, {e:.4g} s "
-                f"({e * f:.1f} cycles) at the end (band-pass start-up, cut at the mode's "
-                "extrema, reflected; ident.free_decay)")
+                f"({e * f:.1f} cycles) at the end (the one-period smoothing; the record was "
+                f"continued beyond both ends by linear prediction of order "
+                f"{PREDICTOR_ORDER} before the band-pass and Hilbert transform; "
+                "ident.free_decay)")
 
 
 def _disagreement(h: DecayTrack, p: DecayTrack, k: int) -> str | None:

@@ -64,7 +64,7 @@ def iwan_decay():
 def test_iwan_decay_identified_back_to_the_backbone(iwan_decay):
     """Acceptance: every row between 5 % and 80 % of the start amplitude within 1e-4 in
     frequency and 2 % in damping of the backbone, for both methods; the rows reach both
-    ends of that range; the trimmed ends are stated (under 8.5 cycles each)."""
+    ends of that range; the trimmed ends are stated (one cycle each)."""
     d = iwan_decay
     res = identify_free_decay(d["record"], n_rows=24)
     for track in (res.hilbert, res.peaks):
@@ -79,7 +79,7 @@ def test_iwan_decay_identified_back_to_the_backbone(iwan_decay):
         assert z_err.max() < 0.02, (track.method, z_err.max())
     s, e = res.isolated.trim_s
     f = res.isolated.frequency_hz
-    assert 5 < s * f < 8.5 and 5 < e * f < 8.5
+    assert 0.5 < s * f < 1.5 and 0.5 < e * f < 1.5
     assert "end effects trimmed" in res.trim_statement
     assert not res.warnings and not any(res.row_warnings)   # clean record: no warning
 
@@ -105,7 +105,8 @@ def test_iwan_decay_rows_estimate_chi_and_diagnose(iwan_decay, tmp_path):
 
 def test_linear_decay_with_noise_within_its_uncertainty():
     """Linear decay with white noise: every row within 5 fit stds of the planted
-    frequency and damping, the errors' rms within 3 stds (the stds are honest)."""
+    frequency and damping, the errors' rms within 3 stds (the stds are honest); rows
+    whose std is under 0.5 % within 2 % (the first rows too: no start-up bias)."""
     rng = np.random.default_rng(8)
     f0, zeta = rng.uniform(10, 60), rng.uniform(0.002, 0.01)
     t, x = linear_decay(f0, zeta, 1e-3, 50 * f0, np.log(1 / 0.01) / (zeta * 2 * np.pi * f0))
@@ -116,7 +117,8 @@ def test_linear_decay_with_noise_within_its_uncertainty():
     z_z = (data.zeta - zeta) / data.extra["x_zeta_std_fit"]
     assert np.abs(z_z).max() < 5 and np.sqrt(np.mean(z_z ** 2)) < 3
     assert np.abs(z_f).max() < 5 and np.sqrt(np.mean(z_f ** 2)) < 3
-    assert np.all(np.abs(data.zeta / zeta - 1) < 0.02)
+    sharp = data.extra["x_zeta_std_fit"] < 0.005 * zeta     # rows the noise leaves sharp
+    assert sharp.sum() >= 6 and np.all(np.abs(data.zeta[sharp] / zeta - 1) < 0.02)
 
 
 def test_clipped_noisy_and_short_records_are_named():

@@ -107,8 +107,8 @@ def report_lines(rep: dict) -> list[str]:
     over = [r["over_start"] for r in c["rows"]]
     out.append(f"  compared window: {w['lo']:g}..{w['hi']:g} x the start amplitude "
                f"{w['start_amplitude_m']:.4g} m: {w['rows_in_window']} rows at "
-               f"{min(over):.3g}..{max(over):.3g} x start (above that: the trimmed start); "
-               f"{w['rows_outside']} identified rows outside the window not compared")
+               f"{min(over):.3g}..{max(over):.3g} x start (the window's rows and the "
+               f"nearest beyond each end); {w['rows_outside']} further rows not compared")
     for note in rep["identification"].get("notes", []):
         out.append(f"  identification: {note}")
     out += comparison_rows(c)
