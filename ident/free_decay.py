@@ -65,6 +65,9 @@ PREDICTOR_PERIODS = 8
 PAD_PERIODS = 4
 BACKWARD_GROWTH = 1e3
 MIN_CYCLES = 3
+#: The decay is taken to start where the smoothed envelope is last within this fraction
+#: of its largest value (:func:`decay_onset`).
+ONSET_DROP = 0.02
 DEFAULT_ROWS = 12
 
 
@@ -208,6 +211,21 @@ def continue_record(y, n, order=None, growth=1.0):
     a = np.real(np.poly(r))
     zi = signal.lfiltic([1.0], a, y=y[::-1][:p])
     return signal.lfilter([1.0], a, np.zeros(n), zi=zi)[0]
+
+
+def decay_onset(t, ln_a, period_s, drop=ONSET_DROP) -> float:
+    """Time (s) from which a record is a free decay. A record whose smoothed log-envelope
+    ``ln_a`` falls from its start at least half as fast as after the last time it is
+    within ``drop`` of its largest value is a decay from its start (``t[0]``);
+    otherwise it held a steady forced response before the shaker was switched off, or
+    a pre-trigger before an impact, and the decay starts at that last time."""
+    i = int(np.flatnonzero(ln_a >= ln_a.max() + np.log1p(-drop))[-1])
+    if i == 0:
+        return float(t[0])
+    j = min(ln_a.size - 1, i + max(i, int(3 * period_s / (t[1] - t[0]))))
+    early = (ln_a[i] - ln_a[0]) / (t[i] - t[0])
+    late = (ln_a[j] - ln_a[i]) / (t[j] - t[i])
+    return float(t[0] if early < 0.5 * late else t[i])
 
 
 def _smooth(v, period):

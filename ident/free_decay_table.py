@@ -29,14 +29,19 @@ import numpy as np
 
 from ident import decay_checks
 from ident.errors import InputError
-from ident.free_decay import (DEFAULT_ROWS, DecayTrack, Isolated, decay_bins, decay_rows,
-                              hilbert_track, isolate_mode, PREDICTOR_ORDER)
+from ident.free_decay import (DEFAULT_ROWS, ONSET_DROP, PREDICTOR_ORDER, DecayTrack,
+                              Isolated, decay_bins, decay_onset, decay_rows, hilbert_track,
+                              isolate_mode)
 from ident.modal_data import MeasuredData, annotation_warnings
+from ident.time_records import TimeRecord
 
 #: Disagreement thresholds of the two methods (module doc).
 SIGMAS, FREQ_REL, ZETA_REL = 3.0, 1e-5, 0.01
 #: Transient-loop allowances (module doc): fractions of the log decrement.
 TRANSIENT_ZETA, TRANSIENT_OMEGA2 = 0.5, 0.25
+#: A record whose envelope peaks later than this many periods after its start is cut
+#: there (a forced part or a pre-trigger before the decay).
+ONSET_PERIODS = 1.5
 
 
 @dataclass
@@ -88,11 +93,26 @@ def identify_free_decay(record, band=None, n_rows: int = DEFAULT_ROWS) -> FreeDe
         raise InputError(f"{where}: n_rows must be >= {decay_checks.MIN_ROWS}, got {n_rows}")
     try:
         iso = isolate_mode(record.time_s, record.signals, band, record.reference)
+        t, ln_a, _, _ = hilbert_track(iso)
+        onset = decay_onset(t, ln_a, 1 / iso.frequency_hz)
+        loud = t[np.argmax(ln_a >= ln_a.max() + np.log1p(-ONSET_DROP))] - 1 / iso.frequency_hz
+        full = record                   # judged for clipping from where it is loud
+        onset_note = None
+        if onset - record.time_s[0] > ONSET_PERIODS / iso.frequency_hz:
+            keep = record.time_s >= onset
+            record = TimeRecord(record.time_s[keep], record.signals[keep], record.points,
+                                record.quantity, record.reference, record.source)
+            onset_note = (f"decay analysed from t = {onset:.6g} s, where the mode's "
+                          f"envelope is last within {100 * ONSET_DROP:g} % of its largest "
+                          "value (what precedes it, a forced response, a pre-trigger or "
+                          f"the decay's first {100 * ONSET_DROP:g} %, is not analysed)")
+            iso = isolate_mode(record.time_s, record.signals, band, record.reference)
     except ValueError as exc:
         raise InputError(f"{where}: {exc}") from None
-    warnings = decay_checks.clipping(record.time_s, record.signals, record.points, iso.sos, [
-        decay_checks.broadband_noise_rms(record.time_s, x, iso.band_hz)
-        for x in record.signals.T])
+    judged = full.time_s >= min(loud, record.time_s[0])
+    warnings = decay_checks.clipping(full.time_s[judged], full.signals[judged], full.points,
+                                     iso.sos, [decay_checks.broadband_noise_rms(
+                                         full.time_s, x, iso.band_hz) for x in full.signals.T])
     ref_raw = record.signals[:, record.reference]
     noise = decay_checks.noise_variance_in_band(record.time_s, ref_raw, iso.band_hz)
     t, ln_a, _, _ = hilbert_track(iso)
@@ -118,7 +138,8 @@ def identify_free_decay(record, band=None, n_rows: int = DEFAULT_ROWS) -> FreeDe
         if snr[k] < decay_checks.SNR_WARN_DB:
             w.append(f"noisy: SNR {snr[k]:.1f} dB in the band")
         rows.append([x for x in w if x])
-    return FreeDecayResult(h, p, iso, snr, iso.notes + warnings, rows)
+    notes = iso.notes + ([onset_note] if onset_note else [])
+    return FreeDecayResult(h, p, iso, snr, notes + warnings, rows)
 
 
 def free_decay_table(record, band=None, n_rows: int = DEFAULT_ROWS,
