@@ -201,7 +201,9 @@ def continue_record(y, n, order=None, growth=1.0):
     linear predictor of ``order`` (forward linear prediction: a sum of damped sinusoids,
     every mode and trend of the segment); fed a time-reversed segment it continues the
     record backwards. The predictor's roots are held within ``growth ** (1 / n)`` in
-    modulus: the continuation grows at most ``growth`` times over its length."""
+    modulus: the continuation grows at most ``growth`` times over its length. Where the
+    predictor is ill-conditioned (a segment of round-off or noise: the continuation
+    exceeds ``2 growth`` times the segment) the segment's mirror image is used."""
     p = order or PREDICTOR_ORDER
     win = np.lib.stride_tricks.sliding_window_view(y, p + 1)
     c, *_ = np.linalg.lstsq(win[:, :-1][:, ::-1], win[:, -1], rcond=None)
@@ -210,7 +212,10 @@ def continue_record(y, n, order=None, growth=1.0):
     r = np.where(np.abs(r) > cap, r / np.abs(r) * cap, r)
     a = np.real(np.poly(r))
     zi = signal.lfiltic([1.0], a, y=y[::-1][:p])
-    return signal.lfilter([1.0], a, np.zeros(n), zi=zi)[0]
+    out = signal.lfilter([1.0], a, np.zeros(n), zi=zi)[0]
+    if np.all(np.isfinite(out)) and np.abs(out).max() <= 2 * growth * np.abs(y).max():
+        return out
+    return np.r_[y[-2::-1], np.zeros(n)][:n]    # ill-conditioned (round-off): mirror image
 
 
 def decay_onset(t, ln_a, period_s, drop=ONSET_DROP) -> float:

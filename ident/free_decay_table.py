@@ -147,9 +147,17 @@ def free_decay_table(record, band=None, n_rows: int = DEFAULT_ROWS,
     """The measured-data rows of a free decay (module doc)."""
     res = result or identify_free_decay(record, band, n_rows)
     h, p = res.hilbert, res.peaks
-    ok = np.flatnonzero(np.isfinite(h.omega2) & np.isfinite(h.zeta) & (h.zeta > 0)
-                        & (h.zeta < 1))
+    lo, hi = res.isolated.band_hz
+    valid = np.isfinite(h.omega2) & np.isfinite(h.zeta) & (h.zeta > 0) & (h.zeta < 1)
+    in_band = valid & (h.frequency_hz > lo) & (h.frequency_hz < hi)
+    ok = np.flatnonzero(in_band)
     where = record.source or "time record"
+    dropped = [f"{(valid & ~in_band).sum()} row(s) centred at t = "
+               f"{', '.join(f'{t:.4g}' for t in np.sort(h.t_center[valid & ~in_band]))} s "
+               "dropped: "
+               f"their frequency lies outside the band {lo:.4g}-{hi:.4g} Hz (the band holds "
+               "other content than the mode there: the other modes, noise or round-off)"
+               ] if (valid & ~in_band).any() else []
     if ok.size < decay_checks.MIN_ROWS:
         raise InputError(f"{where}: {ok.size} usable rows along the decay, at least "
                          f"{decay_checks.MIN_ROWS} are needed ("
@@ -177,5 +185,6 @@ def free_decay_table(record, band=None, n_rows: int = DEFAULT_ROWS,
                "x_source": np.full(n, Path(where).name),
                "x_warning": np.array(warn, dtype=str)},
         source=where)
-    data.warnings = [f"{where}: {res.trim_statement}"] + annotation_warnings(data)
+    data.warnings = ([f"{where}: {res.trim_statement}"] + [f"{where}: {d}" for d in dropped]
+                     + annotation_warnings(data))
     return data

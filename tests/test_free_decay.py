@@ -231,3 +231,18 @@ def test_record_with_a_forced_part_or_pre_trigger_is_analysed_from_the_decay(bef
     said = [w for w in res.warnings if w.startswith("decay analysed from")]
     assert len(said) == 1
     assert not any("clipped" in w for w in res.warnings)
+
+
+def test_rows_past_the_end_of_the_mode_are_dropped_and_said():
+    """A record that goes on long after the mode has decayed below a slow, lightly damped
+    other mode (seeded frequencies): the rows where the band holds no mode are dropped
+    with one line, the rest within 1 % of the planted damping."""
+    rng = np.random.default_rng(41)
+    f0, zeta = rng.uniform(150, 300), rng.uniform(0.008, 0.015)
+    t, x = linear_decay(f0, zeta, 1.0, 64 * f0, 40 * np.log(10) / (zeta * 2 * np.pi * f0))
+    slow = 0.01 * np.cos(2 * np.pi * rng.uniform(3, 8) * t) * np.exp(-0.1 * t)
+    data = free_decay_table(TimeRecord(t, x + slow, ["1"]))
+    f = np.sqrt(data.omega2) / (2 * np.pi)
+    assert np.all(np.abs(f / f0 - 1) < 0.01)
+    assert np.all(np.abs(data.zeta / zeta - 1) < 0.01), data.zeta / zeta - 1
+    assert sum("dropped" in w for w in data.warnings) == 1
