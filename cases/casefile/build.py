@@ -17,7 +17,8 @@ range, so two stacked beams share their nodes over an interface. Each beam's ref
   ``((h_bot + h_top)/2)^2`` on ``theta_top - theta_bot`` (springs on ``w`` at the nodes
   alone leave the two Hermite layers free to turn against each other at a node: a
   section change at a lap end then acts as a hinge, 2.4 % low on a lap whose stuck joints
-  are 1e3 times stiffer than the layers, at every mesh size; tests/test_case_file.py);
+  are 1e3 times stiffer than the layers, at every mesh size;
+  tests/test_case_file_interfaces.py);
 * ``tangential = "tied"``: bonded, one plane section: :data:`TIED_PENALTY` times the
   normal stiffness on the slip, and the rotation tie above;
   ``"free"``: nothing (frictionless); ``"joint"``: joint elements on the slip
