@@ -113,10 +113,10 @@ def test_stiffness_shares_sum_to_kt_trapezoidal_and_equal():
     shares = np.array([j["share"] for j in built.joint_table])
     np.testing.assert_allclose(shares, [0.125, 0.25, 0.25, 0.25, 0.125], rtol=1e-12)
     assert built.model.joint_stiffness.sum() == pytest.approx(cf.interfaces[1].kt, rel=1e-14)
-    brb_file = read_case_file("cases/brb/brb.toml")    # three joint interfaces (bolt patch, ends)
+    brb_file = read_case_file("cases/brb/brb.toml")    # the bolt patch's joints, lap ends open
     brb = build_model(brb_file)
     assert brb.model.joint_stiffness.sum() == pytest.approx(
-        sum(i.kt for i in brb_file.interfaces), rel=1e-14)
+        sum(i.kt for i in brb_file.interfaces if i.tangential == "joint"), rel=1e-14)
 
 
 def test_double_beam_case_file_equals_its_python_model():
@@ -151,14 +151,16 @@ def test_capability_missing_is_one_line():
         resolve_case("nope")
 
 
-def test_convergence_against_the_finest_mesh_falls_with_refinement():
+def test_convergence_against_the_finest_mesh_is_reached_at_the_coarsest():
+    """A lap whose tied contact keeps one slope: the lap cantilever's first six modes
+    change by less than 2e-5 from 5 mm to 0.625 mm elements (what is left, ~5e-6, is the
+    contact penalties' compliance, which follows the tributary lengths; before the
+    rotation tie: 2e-3, falling as h^2)."""
     from cases.case_convergence import case_convergence
 
     r = case_convergence(resolve_case("docs/case-files/bolted-lap-cantilever.toml"), levels=4)
-    change = np.array(r["relative_change_vs_finest"])[:-1, :3]
-    assert np.all(np.diff(change, axis=0) < 0)
-    # nodal contact springs integrate the interface by the trapezoidal rule: O(h^2)
-    assert np.all((np.array(r["rate"][:3]) > 1.8) & (np.array(r["rate"][:3]) < 2.3))
+    change = np.array(r["relative_change_vs_finest"])
+    assert np.all(change[:-1] < 2e-5) and np.all(change[-1] == 0.0)
     assert r["element_size_m"] == [0.005, 0.0025, 0.00125, 0.000625]
 
 
@@ -171,7 +173,7 @@ def test_case_check_and_modes_on_the_command_line(capsys):
     s = json.loads(capsys.readouterr().out)
     kinds = {p["parameter"]: p["kind"] for p in s["parameters"]}
     assert kinds["interface.0.kt"] == "given" and kinds["sensor.0.mass"] == "default"
-    assert main(["modes", "--case", "brb", "--band", "0", "500", "--json"]) == 0
+    assert main(["modes", "--case", "brb", "--band", "0", "700", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [r["bending_order"] for r in rows if r["frequency_hz"] > 1] == [1, 2]
 

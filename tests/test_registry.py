@@ -42,8 +42,12 @@ def test_case_model_has_the_estimator_interface_and_its_modes(name):
     np.testing.assert_allclose(np.einsum("ij,ik,kj->j", shapes, M, shapes), 1.0, rtol=1e-8)
     # and they are the lowest four: dense generalized eigenvalues (a second method)
     lam = sla.eigh(K, M, eigvals_only=True)[:4]
-    np.testing.assert_allclose(freqs, np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi), rtol=1e-5,
-                               atol=1e-3 * freqs.max())
+    dense = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
+    elastic = freqs > 1e-2 * freqs.max()
+    np.testing.assert_allclose(freqs[elastic], dense[elastic], rtol=1e-5, atol=1e-3 * freqs.max())
+    # rigid-body modes: round-off of the dense solver on a K with ~1e12 N/m entries (the
+    # BRB's: 0.04-0.2 Hz, varying with the BLAS threads), far below the elastic ones
+    assert np.all(dense[~elastic] < 1e-2 * freqs.max())
 
 
 def test_case_modes_refuses_more_modes_than_dofs():
