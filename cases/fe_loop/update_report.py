@@ -1,6 +1,6 @@
-"""The report of ``iwanfe update --case double-beam``: JSON, text, markdown, figures.
+"""The report of ``iwanfe update --case NAME|FILE``: JSON, text, markdown, figures.
 
-:func:`summary` turns :func:`cases.double_beam.update_study.run_update`'s result into
+:func:`summary` turns :func:`cases.fe_loop.update.run_update`'s result into
 one JSON-ready dict; :func:`format_text` and :func:`markdown` word it;
 :func:`write_update` writes ``updated_model.json`` (the model: every parameter with
 its kind and interval, the joint it makes), ``update.json`` (everything),
@@ -14,8 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.double_beam.fe_levels import level_entries
-from cases.double_beam.update_study import BASE_PARAMETERS
+from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
 from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
 from inverse.profile import bounded_interval
@@ -138,7 +137,7 @@ def summary(r: dict) -> dict:
                     "shift_top_zeta_rel": (a["headline"]["zeta"][-1] / base_head["zeta"][-1] - 1)
                     if base_head["zeta"] else None}
                    for a in r.get("assumptions", [])]
-    return {"case": r.get("case", "double-beam"), "source": str(data.source),
+    return {"case": r["case"], "source": str(data.source),
             "mode": r["settings"].mode_label,
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
