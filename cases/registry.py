@@ -49,6 +49,7 @@ def resolve_case(name_or_file: str):
             case.builders["fe_levels"] = _double_beam_levels
             case.builders["fe_check"] = lambda measured_omega2: fe_check(
                 "double-beam", measured_omega2)
+            case.builders["uncertainty"] = _double_beam_uncertainty
         return case
     if key == "lumped":
         return _lumped_case()
@@ -74,6 +75,14 @@ def _double_beam_update(executor="serial", progress=False, store=None, **setting
     return run_update(UpdateSettings(**settings), DoubleBeamLevels.from_data, executor=executor,
                       progress=progress, store=store, case_name="double-beam",
                       model_key=repr(DoubleBeamConfig()), assumptions=variants)
+
+
+def _double_beam_uncertainty(settings, **options):
+    """The double beam's Monte Carlo (:func:`cases.double_beam.uncertainty_report.
+    run_uncertainty`: a stepped sine per sample)."""
+    from cases.double_beam.uncertainty_report import run_uncertainty
+
+    return run_uncertainty(settings, **options)
 
 
 def _double_beam_levels(data, force_scale: float = 1.0):

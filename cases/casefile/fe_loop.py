@@ -24,7 +24,8 @@ from dataclasses import dataclass
 from cases.casefile.parameters import get_parameter, set_parameter
 from ident.errors import InputError
 
-__all__ = ["qualifies", "levels_builder", "assumption_variants", "update_builder"]
+__all__ = ["qualifies", "levels_builder", "assumption_variants", "update_builder",
+           "uncertainty_builder"]
 
 
 def qualifies(cf) -> bool:
@@ -86,18 +87,24 @@ def assumption_variants(cf) -> dict:
     return out
 
 
-def _defaults(cf) -> dict:
+def _defaults(cf, data_path=None, mode=None) -> dict:
+    """Data, mode label and fit levels (module docstring) of the table at ``data_path``
+    (default the file's) and ``mode`` (default the file's)."""
     from ident.measured import read_measured
 
-    table = read_measured(cf.measured.file)
+    path = cf.measured.file if data_path is None else data_path
+    table = read_measured(path)
     labels = sorted({int(m) for m in table.mode})
-    mode = cf.measured.mode if cf.measured.mode in labels else labels[0]
-    if len(labels) > 1 and mode != cf.measured.mode:
-        raise InputError(f"{cf.path}: [measured] mode = {cf.measured.mode} is none of the "
-                         f"table's mode labels {labels}: give --mode")
+    if mode is None:
+        mode = cf.measured.mode if cf.measured.mode in labels else labels[0]
+        if len(labels) > 1 and mode != cf.measured.mode:
+            raise InputError(f"{path}: [measured] mode = {cf.measured.mode} is none of the "
+                             f"table's mode labels {labels}: give --mode")
+    elif int(mode) not in labels:
+        raise InputError(f"{path}: no mode {mode} in the table (labels {labels})")
     levels = sorted(int(v) for v in table.for_mode(mode).level)
     fit = levels[:-3] if len(levels) >= 8 else levels
-    return {"data_path": str(cf.measured.file), "mode_label": int(mode),
+    return {"data_path": str(path), "mode_label": int(mode),
             "fit_levels": ",".join(map(str, fit))}
 
 
@@ -108,9 +115,30 @@ def update_builder(cf):
     def update(executor="serial", progress=False, store=None, **settings):
         from cases.fe_loop.update import UpdateSettings, run_update
 
-        settings = {**_defaults(cf), **{k: v for k, v in settings.items() if v is not None}}
+        settings = {k: v for k, v in settings.items() if v is not None}
+        settings = {**_defaults(cf, settings.get("data_path"), settings.get("mode_label")),
+                    **settings}
         variants = assumption_variants(cf) if settings.get("assumptions") else None
         return run_update(UpdateSettings(**settings), levels_builder(cf), executor=executor,
                           progress=progress, store=store, case_name=cf.name,
                           model_key=cf.path.read_text(), assumptions=variants)
     return update
+
+
+def uncertainty_builder(cf):
+    """``uncertainty(data_path, mode_label, fit_levels, force_scale, **options)``:
+    :func:`cases.fe_loop.uncertainty.run_fe_uncertainty` on the file's FE-levels model
+    (``options``: its ``n_samples``, ``seed``, ``confidence``, ``distribution``, ``out``,
+    ``executor``, ``progress``; the defaults of the module docstring fill the rest)."""
+    def uncertainty(data_path=None, mode_label=None, fit_levels=None, force_scale=1.0,
+                    **options):
+        from cases.casefile.build import build_model
+        from cases.casefile.calibrate import calibrate
+        from cases.fe_loop.uncertainty import LevelsStudy, run_fe_uncertainty
+
+        d = _defaults(cf, data_path, mode_label)
+        study = LevelsStudy(d["data_path"], d["mode_label"], fit_levels or d["fit_levels"],
+                            float(force_scale), cf.name)
+        model = build_model(calibrate(cf)[0]).model
+        return run_fe_uncertainty(levels_builder(cf), model, study, **options)
+    return uncertainty

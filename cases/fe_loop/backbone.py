@@ -28,17 +28,19 @@ from inverse.iwan_modal import kappa_ratio
 __all__ = ["estimated_joint", "predict_from_backbone"]
 
 
-def estimated_joint(fe, est, zeta_1: float) -> dict:
-    """The parameter set of :class:`FELevels` ``fe`` for the joint of estimate ``est``
-    at the case's stuck frequency (module docstring), and its ``joint``/``setup``."""
-    if not -1.0 < est.chi < 0.0 or not est.kappa1_B > 0:
-        raise InputError(f"--backbone: the estimate (chi = {est.chi:.4g}, |kappa1| B = "
-                         f"{est.kappa1_B:.4g}) is no Iwan joint")
+def estimated_joint(fe, chi: float, dc1: float, zeta_1: float) -> dict:
+    """The parameter set of :class:`FELevels` ``fe`` for an Iwan joint of exponent
+    ``chi`` and ``|kappa1| B~ = dc1`` (rad^2/s^2) at level 1, at the case's stuck
+    frequency, the viscous damping matched so that level 1 has ``zeta_1`` (module
+    docstring)."""
+    if not -1.0 < chi < 0.0 or not dc1 > 0:
+        raise InputError(f"the estimate (chi = {chi:.4g}, |kappa1| B = {dc1:.4g}) is no "
+                         "Iwan joint")
     lin = fe.linear(fe.default_kt)
     w2 = lin.omega_k ** 2
-    Om2 = w2 - kappa_ratio(est.chi, "exact") * est.kappa1_B
-    zeta_v = (float(zeta_1) - est.kappa1_B / (2.0 * Om2)) * math.sqrt(Om2 / w2)
-    return {"chi": float(est.chi), "ln_dc1": math.log(est.kappa1_B), "zeta_v": zeta_v,
+    Om2 = w2 - kappa_ratio(chi, "exact") * dc1
+    zeta_v = (float(zeta_1) - dc1 / (2.0 * Om2)) * math.sqrt(Om2 / w2)
+    return {"chi": float(chi), "ln_dc1": math.log(dc1), "zeta_v": zeta_v,
             "f0_hz": lin.omega_k / (2.0 * math.pi)}
 
 
@@ -65,7 +67,7 @@ def predict_from_backbone(data, est, levels, force_scale: float = 1.0, case_name
     """
     d = data.for_mode(est.mode)
     fe = levels(d, force_scale=float(force_scale))
-    p = estimated_joint(fe, est, d.zeta[0])
+    p = estimated_joint(fe, est.chi, est.kappa1_B, d.zeta[0])
     j, red, _, _, _ = fe.setup(p)
     lin = j["linear"]
     mode = int(np.sum(lin.red.omega < lin.omega_k)) + 1    # its rank in the reduced model
