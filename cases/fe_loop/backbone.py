@@ -4,10 +4,12 @@
 the damping growth of the fit levels, :func:`inverse.estimate.estimate` with the case's
 FE model) into the case's FE-levels model (:class:`cases.fe_loop.levels.FELevels`: one
 Iwan element per joint element, ``beta = 0``, the reduced basis with static joint
-modes) with the viscous modal damping matched so that the lowest level has its
-measured damping ratio (eq. 2 of :mod:`inverse.estimate`:
-``Omega^2 = omega_n^2 - (kappa2/|kappa1|) dc1``,
-``zeta_v = (zeta_1 - dc1 / (2 Omega^2)) Omega / omega_n``), computes the nonlinear
+modes) with the stuck frequency and the viscous modal damping matched so that the
+lowest level has its measured omega^2 and damping ratio (eq. 2 of
+:mod:`inverse.estimate`: ``omega_n^2 = Omega_1^2 + (kappa2/|kappa1|) dc1``,
+``zeta_v = (zeta_1 - dc1 / (2 Omega_1^2)) Omega_1 / omega_n``, ``dc1 = |kappa1| B~``
+at level 1; the stiffness scaled by ``omega_n^2 / omega_k^2``, structure and joints
+alike, as ``f0_hz`` of :class:`FELevels` does), computes the nonlinear
 mode by EPMC (:mod:`fe.epmc`, exact-DF path: no slider discretization) and reads it at
 the resonance of every level's force (eq. 1 of :mod:`fe.backbone`: single nonlinear
 mode, drive at the case's drive DOF). Unlike the estimator's closed-form predictions
@@ -17,6 +19,7 @@ distributed slip and macro-slip. SI units.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,24 +27,24 @@ from fe.epmc import epmc_backbone
 from fe.joint_harmonics import ExactHarmonics
 from ident.errors import InputError
 from inverse.iwan_modal import kappa_ratio
+from joints.iwan import IwanParameters
 
 __all__ = ["estimated_joint", "predict_from_backbone"]
 
 
-def estimated_joint(fe, chi: float, dc1: float, zeta_1: float) -> dict:
-    """The parameter set of :class:`FELevels` ``fe`` for an Iwan joint of exponent
-    ``chi`` and ``|kappa1| B~ = dc1`` (rad^2/s^2) at level 1, at the case's stuck
-    frequency, the viscous damping matched so that level 1 has ``zeta_1`` (module
+def estimated_joint(chi: float, dc1: float, omega2_1: float, zeta_1: float) -> dict:
+    """The parameter set of :class:`FELevels` for an Iwan joint of exponent ``chi`` and
+    ``|kappa1| B~ = dc1`` (rad^2/s^2) at level 1, the stuck frequency and the viscous
+    damping matched so that level 1 has ``omega2_1`` (rad^2/s^2) and ``zeta_1`` (module
     docstring)."""
     if not -1.0 < chi < 0.0 or not dc1 > 0:
         raise InputError(f"the estimate (chi = {chi:.4g}, |kappa1| B = {dc1:.4g}) is no "
                          "Iwan joint")
-    lin = fe.linear(fe.default_kt)
-    w2 = lin.omega_k ** 2
-    Om2 = w2 - kappa_ratio(chi, "exact") * dc1
+    Om2 = float(omega2_1)
+    w2 = Om2 + kappa_ratio(chi, "exact") * dc1
     zeta_v = (float(zeta_1) - dc1 / (2.0 * Om2)) * math.sqrt(Om2 / w2)
     return {"chi": float(chi), "ln_dc1": math.log(dc1), "zeta_v": zeta_v,
-            "f0_hz": lin.omega_k / (2.0 * math.pi)}
+            "f0_hz": math.sqrt(w2) / (2.0 * math.pi)}
 
 
 def predict_from_backbone(data, est, levels, force_scale: float = 1.0, case_name: str = "",
@@ -67,11 +70,14 @@ def predict_from_backbone(data, est, levels, force_scale: float = 1.0, case_name
     """
     d = data.for_mode(est.mode)
     fe = levels(d, force_scale=float(force_scale))
-    p = estimated_joint(fe, est.chi, est.kappa1_B, d.zeta[0])
-    j, red, _, _, _ = fe.setup(p)
-    lin = j["linear"]
+    p = estimated_joint(est.chi, est.kappa1_B, d.omega2[0], d.zeta[0])
+    j, red, scale, _, _ = fe.setup(p)
+    lin, a = j["linear"], float(scale[0])      # the stiffness scale of f0_hz
+    red = replace(red, K=a * red.K)
     mode = int(np.sum(lin.red.omega < lin.omega_k)) + 1    # its rank in the reduced model
-    joints = ExactHarmonics(j["params"], red.n_joints)
+    params = [IwanParameters(chi=q.chi, K_T=a * q.K_T, F_S=a * q.F_S, beta=q.beta)
+              for q in j["params"]]
+    joints = ExactHarmonics(params, red.n_joints)
     force = force_scale * np.asarray(d.excitation, dtype=float)
     s_lin = lin.a_ref * force / force[0]
     lo, hi = 0.25 * s_lin.min(), 4.0 * s_lin.max()

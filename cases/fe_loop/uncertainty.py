@@ -6,9 +6,9 @@ The estimator's fit of the fit levels (``exact``, paper eq. 33-35,
 with the fit's dof or normal, truncated to -1 < chi < 0, one executor task and one seed
 stream per sample, resumable store). Each sample is put into the case's FE-levels model
 (:class:`cases.fe_loop.levels.FELevels`: one Iwan element per joint element, ``beta =
-0``, ``chi = p - 1``, ``|kappa1| B~ = Kt / p`` at level 1, eq. 36-37) with the viscous
-damping matched to the measured level 1 (:func:`cases.fe_loop.backbone.estimated_joint`)
-and simulated at every level by first-harmonic balance at phase resonance with the
+0``, ``chi = p - 1``, ``|kappa1| B~ = Kt / p`` at level 1, eq. 36-37) with the stuck
+frequency and the viscous damping matched to the measured level 1
+(:func:`cases.fe_loop.backbone.estimated_joint`) and simulated at every level by first-harmonic balance at phase resonance with the
 exact describing function (:func:`fe.hb_resonance.resonance_levels`, about 15 ms per
 sample). The report gives per level the measured value, the nominal prediction (the
 estimate itself) and the samples' median and central interval; failed samples are
@@ -77,7 +77,7 @@ def simulate_levels(inputs: LevelsSweepInputs, p=None, ln_kt=None) -> dict:
     ``R``, ``phi_max``, ``zeta_viscous``."""
     fe, est = _prepared(inputs)
     chi, dc1 = (est.chi, est.kappa1_B) if p is None else (p - 1.0, math.exp(ln_kt) / p)
-    values = estimated_joint(fe, chi, dc1, inputs.data.zeta[0])
+    values = estimated_joint(chi, dc1, inputs.data.omega2[0], inputs.data.zeta[0])
     pred = fe.predict(values)
     return {"frequency_hz": pred.frequency_hz, "zeta": pred.zeta,
             "slip_over_phi_max": pred.slip_over_phi_max, "chi": chi, "R": pred.joint["R"],
@@ -109,7 +109,9 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     dict: ``estimate`` (chi with its t-interval, ``|kappa1| B``, dof), ``distribution``,
     ``chi`` (quantiles of the admitted draws), ``levels`` (per level: ``held_out``,
     measured, nominal, ``mc`` median/lo/hi of frequency (Hz) and zeta, whether the
-    measured value lies inside), ``n_failed`` and ``failures``, ``store``, ``timing_s``.
+    measured value lies inside; None at level 1, matched by every sample),
+    ``n_failed`` and ``failures``, ``computed`` (samples not loaded from the store),
+    ``store``, ``timing_s``.
     """
     if not 0 < confidence < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
@@ -146,8 +148,8 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
                "nominal_zeta": float(nominal.values["zeta"][i])}
         for name, mc, meas in (("frequency_hz", mc_f, f_meas[i]), ("zeta", mc_z, data.zeta[i])):
             row[f"mc_{name}"] = {k: (None if v is None else v[i]) for k, v in mc.items()}
-            row[f"measured_{name}_inside"] = None if mc["lo"] is None else \
-                bool(mc["lo"][i] <= meas <= mc["hi"][i])
+            row[f"measured_{name}_inside"] = None if mc["lo"] is None or i == 0 else \
+                bool(mc["lo"][i] <= meas <= mc["hi"][i])      # level 1: matched (None)
         rows.append(row)
     chis = [float(s.values["chi"]) for s in ok]
     return {
@@ -165,4 +167,5 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
                      for s in samples if s.status != "ok"],
         "store": None if store is None else str(store.path),
         "executor": executor.describe() if isinstance(executor, ExecutorSpec) else str(executor),
+        "computed": sum(not s.loaded for s in [nominal, *samples]),
         "timing_s": {"total": time.perf_counter() - t0}}

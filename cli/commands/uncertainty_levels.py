@@ -42,7 +42,8 @@ def text(r: dict) -> str:
             lines.append(f" {row['level']:>4}{'*' if row['held_out'] else ' '} "
                          f"{s(row[f'measured_{key}'])}  {s(row[f'nominal_{key}'])}  "
                          f"{s(mc['median'])}  {s(mc['lo'])} .. {s(mc['hi'])}  "
-                         f"{'yes' if row[f'measured_{key}_inside'] else 'no'}")
+                         + {True: "yes", False: "no", None: "matched"}[
+                             row[f"measured_{key}_inside"]])
         lines.append("")
     for f in r["failures"][:5]:
         lines.append(f"failed sample {f['index']} (chi = {f['chi']:.4f}): {f['status']}")
