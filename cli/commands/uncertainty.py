@@ -64,7 +64,8 @@ def register(subparsers) -> None:
                         help="root seed (each sample has its own stream)")
     parser.add_argument("--fit-levels", default=None, metavar="LEVELS",
                         help="levels of the chi fit; the others are predicted (default: "
-                             "1-7 for the double beam, a case file's update default)")
+                             "1-7 for the double beam; a case file: all but the top three "
+                             "levels)")
     parser.add_argument("--confidence", type=float, default=DEFAULT_CONFIDENCE,
                         help="central interval of the samples and level of the "
                              "delta-method interval, in (0, 1) (0.9: 5-95 %%)")
