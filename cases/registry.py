@@ -4,8 +4,9 @@
 (:data:`SHIPPED`: each a case file, or a Python case such as the lumped 10-DOF model) or
 for a path to a ``.toml`` case file; a case file with iwan4 joints and measured data
 gets the generic FE loop (:mod:`cases.casefile.fe_loop` on :mod:`cases.fe_loop`), the
-double beam puts its Python FE-levels model in (``update``, ``fe_levels``, and its
-``fe_check``). The older helpers below serve ``estimate --case``:
+double beam puts its Python FE-levels model in (``update``, ``fe_levels``) and adds its
+own ``fe_check`` and ``uncertainty`` (a stepped sine per sample). The older helpers
+below serve ``estimate --case``:
 :func:`build_case` builds the double beam's Python model (equal to its case file's to
 ~2e-8 in frequency, the calibrated clamp grip's last digits), :data:`MEASURED_DATA`,
 :func:`fe_check`. The case modules are imported only when a case is built.

@@ -1,4 +1,4 @@
-"""The FE-level diagnosis (cases/double_beam/fe_diagnosis.py) and the update command.
+"""The FE-level diagnosis (cases/fe_loop/diagnosis.py) and the update command.
 
 Truth: virtual tests of the double beam made independently of the diagnosis
 (cases/double_beam/fe_synthetic.py: another glue discretization and K_T, Jenkins banks,

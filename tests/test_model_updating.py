@@ -1,5 +1,5 @@
 """Model updating (inverse/update.py, inverse/profile.py) and the FE double beam by
-parameters (cases/double_beam/fe_levels.py).
+parameters (cases/fe_loop/levels.py, the double beam's cases/double_beam/fe_levels.py).
 
 Truths: planted parameters of a closed-form simulator (the modal Iwan relations, paper
 eq. 30-32 with eq. 45 corrected) and of the FE simulation itself, planted noise levels,
