@@ -72,7 +72,8 @@ def _json(capsys, *argv):
 def test_uncertainty_on_the_case_file(planted, capsys, tmp_path):
     """The planted chi inside the estimate's 90 % t-interval; the noise-free truth at
     the held-out levels inside the Monte Carlo's 5-95 % band; level 1 matched by every
-    sample; a rerun loads every sample (resumable) and gives the same numbers."""
+    sample; a rerun loads every sample (resumable) and gives the same numbers, and so
+    does a pool of two processes (each sample from a cold start)."""
     path, chi, (om2, zeta) = planted
     argv = ("uncertainty", path, "--case", LAP, "--samples", 60, "--out", tmp_path,
             "--no-progress")
@@ -93,6 +94,9 @@ def test_uncertainty_on_the_case_file(planted, capsys, tmp_path):
     assert first["nominal_zeta"] == pytest.approx(first["measured_zeta"], rel=2e-4)
     again = _json(capsys, *argv)
     assert again["computed"] == 0 and again["levels"] == r["levels"]
+    pool = _json(capsys, *argv[:-3], "--out", tmp_path / "pool", "--no-progress",
+                 "--executor", "processes", "--workers", "2")
+    assert pool["computed"] == 61 and pool["levels"] == r["levels"]   # bit for bit
 
 
 def test_update_assumptions_on_the_case_file(planted, capsys):

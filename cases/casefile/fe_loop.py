@@ -1,14 +1,16 @@
 """The FE loop of a case file: its FE-levels model (:class:`cases.casefile.levels.
 CaseLevels`), ``update`` (:func:`cases.fe_loop.update.run_update` on it, the one judge
-of :func:`cases.fe_loop.select.fe_select` choosing the model) and the assumed properties
-``update --assumptions`` changes (:func:`assumption_variants`), for a file whose joint
+of :func:`cases.fe_loop.select.fe_select` choosing the model), the assumed properties
+``update --assumptions`` changes (:func:`assumption_variants`) and ``uncertainty``
+(:func:`cases.fe_loop.uncertainty.run_fe_uncertainty` on it), for a file whose joint
 interfaces all have law ``iwan4`` and a ``kt``, with a ``[drive]`` and a ``[measured]``
 table.
 
 Defaults a command may override: the data are the file's table, the mode label the
 file's ``[measured] mode`` when the table has it (else the table's only mode label),
-the fit levels all but the top three of the table (at least 5 fitted). The file's ``chi``, ``fs``, ``beta`` are
-the nominal joint: ``update`` fits ``chi`` and the joint strength to the data.
+the fit levels all but the top three of the table (at least 5 fitted). The file's
+``chi``, ``fs``, ``beta`` are the nominal joint: ``update`` fits ``chi`` and the joint
+strength to the data.
 
 Assumed properties (:func:`assumption_variants`), each changed alone: every material's
 ``E`` by -/+ 3 % and ``rho`` by -/+ 2 % (the spread of handbook values of one alloy), every

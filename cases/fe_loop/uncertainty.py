@@ -78,6 +78,7 @@ def simulate_levels(inputs: LevelsSweepInputs, p=None, ln_kt=None) -> dict:
     fe, est = _prepared(inputs)
     chi, dc1 = (est.chi, est.kappa1_B) if p is None else (p - 1.0, math.exp(ln_kt) / p)
     values = estimated_joint(chi, dc1, inputs.data.omega2[0], inputs.data.zeta[0])
+    fe.reset()             # no warm start: a sample's bits do not depend on the executor
     pred = fe.predict(values)
     return {"frequency_hz": pred.frequency_hz, "zeta": pred.zeta,
             "slip_over_phi_max": pred.slip_over_phi_max, "chi": chi, "R": pred.joint["R"],
