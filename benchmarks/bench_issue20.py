@@ -64,7 +64,8 @@ def update_benchmark() -> None:
         name = spec if isinstance(spec, str) else spec.describe()
         stages = ", ".join(f"{k} {v:.1f} s" for k, v in r["timing_s"].items() if k != "total")
         print(f"   {name:22s}: {wall:5.1f} s wall, {cpu + child:5.1f} s CPU ({stages}); "
-              f"model {r['candidate']}, chi2 {r['fit'].chi2:.3f}; wall {_verdict(wall, TARGET_UPDATE_S)}")
+              f"model {r['candidate']}, chi2 {r['fit'].chi2:.3f}; wall "
+              f"{_verdict(wall, TARGET_UPDATE_S)}, CPU {_verdict(cpu + child, TARGET_UPDATE_S)}")
 
 
 def case_file_benchmark(repeat: int) -> None:

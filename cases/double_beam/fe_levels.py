@@ -16,7 +16,8 @@ from cases.double_beam.model import DoubleBeamConfig, build_double_beam
 from cases.fe_loop.levels import FELevels, LinearPart
 from fe.beam import W
 
-__all__ = ["DEFAULT_KT", "DoubleBeamLevels", "ASSUMPTIONS", "DoubleBeamVariant", "assumption_variants"]
+__all__ = ["DEFAULT_KT", "DoubleBeamLevels", "ASSUMPTIONS", "DoubleBeamVariant",
+           "assumption_variants"]
 
 #: K_T (N/m) of the shipped case (an assumption, :mod:`cases.double_beam.model`).
 DEFAULT_KT = DoubleBeamConfig().glue_tangential_stiffness

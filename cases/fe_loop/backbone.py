@@ -87,7 +87,8 @@ def predict_from_backbone(data, est, levels, force_scale: float = 1.0, case_name
         if F[-1] >= force.max() and F[0] <= force.min() and np.all(np.diff(F) > 0):
             break
         lo, hi = (lo / 4 if F[0] > force.min() else lo), hi * 4
-    ok = (force >= F[0]) & (force <= F[-1]) if np.all(np.diff(F) > 0) else np.zeros_like(force, bool)
+    ok = (force >= F[0]) & (force <= F[-1]) if np.all(np.diff(F) > 0) \
+        else np.zeros_like(force, bool)
     n = force.size
     om2, zeta, ratio = (np.full(n, np.nan) for _ in range(3))
     if ok.any():
@@ -101,6 +102,6 @@ def predict_from_backbone(data, est, levels, force_scale: float = 1.0, case_name
              "slip_over_phi_max": None if np.isnan(ratio[i]) else float(ratio[i]),
              "measured_omega2": float(d.omega2[i]), "measured_zeta": float(d.zeta[i])}
             for i in range(n)]
-    return {"case": case_name, "model": fe.label, "fe_mode": lin.fe_mode, "chi": j["chi"], "R": j["R"],
-            "phi_max": j["phi_max"], "zeta_viscous": p["zeta_v"], "path": "exact",
-            "points": len(bb), "levels": rows}
+    return {"case": case_name, "model": fe.label, "fe_mode": lin.fe_mode, "chi": j["chi"],
+            "R": a * j["R"], "phi_max": j["phi_max"], "zeta_viscous": p["zeta_v"],
+            "path": "exact", "points": len(bb), "levels": rows}

@@ -8,9 +8,9 @@ stream per sample, resumable store). Each sample is put into the case's FE-level
 (:class:`cases.fe_loop.levels.FELevels`: one Iwan element per joint element, ``beta =
 0``, ``chi = p - 1``, ``|kappa1| B~ = Kt / p`` at level 1, eq. 36-37) with the stuck
 frequency and the viscous damping matched to the measured level 1
-(:func:`cases.fe_loop.backbone.estimated_joint`) and simulated at every level by first-harmonic balance at phase resonance with the
-exact describing function (:func:`fe.hb_resonance.resonance_levels`, about 15 ms per
-sample). The report gives per level the measured value, the nominal prediction (the
+(:func:`cases.fe_loop.backbone.estimated_joint`) and simulated at every level by
+first-harmonic balance at phase resonance with the exact describing function
+(:func:`fe.hb_resonance.resonance_levels`, from a cold start: a few ms per sample). The report gives per level the measured value, the nominal prediction (the
 estimate itself) and the samples' median and central interval; failed samples are
 counted with their reason and left out of the quantiles. (The double beam's own
 Monte Carlo, a Jenkins-bank stepped sine per sample, is
