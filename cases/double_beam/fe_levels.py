@@ -47,6 +47,11 @@ class DoubleBeamLevels(FELevels):
 
         return self.reduce(model, K_T, lambda3, width=cfg.width, grip=cfg.grip)
 
+    def structure(self, lin: LinearPart) -> str:
+        if self.config.clamp_length is None:
+            return f"grip {1e3 * lin.grip:.3f} mm (calibrated to 252.0 Hz for this K_T)"
+        return f"grip {1e3 * lin.grip:.3f} mm (given)"
+
 
 _D = DoubleBeamConfig()
 #: Assumed properties of :class:`DoubleBeamConfig` and the changes tried (handbook

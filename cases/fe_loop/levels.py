@@ -223,6 +223,10 @@ class FELevels:
         :meth:`reduce`."""
         raise NotImplementedError
 
+    def structure(self, lin: LinearPart) -> str:
+        """How the structure of ``lin`` was calibrated, in reports."""
+        return "structure as the case file gives or calibrates it"
+
     def reduce(self, model, K_T: float, lambda3, width: float, grip: float) -> LinearPart:
         """The :class:`LinearPart` of an FE ``model`` with joints (``M``,
         ``K_without_joints``, ``slip_matrix``, ``joint_stiffness``, ``drive_dof``,
@@ -322,6 +326,7 @@ class FELevels:
             slip, modal = slip.reshape(-1, n).max(axis=1), modal.reshape(-1, n) @ weight
         joint = {k: v for k, v in j.items() if k not in ("params", "linear")}
         joint["grip"] = lin.grip
+        joint["structure"] = self.structure(lin)
         return LevelPrediction(omega2=omega2, zeta=zeta, slip_over_phi_max=slip / j["phi_max"],
                                joint=joint, modal_amplitude=modal)
 

@@ -57,17 +57,17 @@ def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
         est = None
     P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
          "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
-                             "ln |kappa1| B~ at level 1: the glue's modal damping there"),
+                             "ln |kappa1| B~ at level 1: the joints' modal damping there"),
          "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
                              "viscous modal damping ratio"),
          "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
-                            "stuck-glue natural frequency of the mode"),
+                            "stuck-joint natural frequency of the mode"),
          "log10_kt": Parameter("log10_kt", math.log10(fe.default_kt),
                                6.0, 11.0, 0.5, "log10 N/m",
                                "stuck tangential stiffness of all joints together"),
          "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
                                 "1", "ln(phi_max / a_ref): macro-slip onset in units of "
-                                "the level-1 glue slip (beta = 0 above its limit)")}
+                                "the level-1 joint slip (beta = 0 above its limit)")}
     starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
     return P, starts
 
