@@ -21,8 +21,8 @@ from cases.casefile.levels import CaseLevels
 from cases.casefile.nonlinear import nonlinear_case
 from cases.casefile.stepped_sine_test import SIGMA_OMEGA2, SIGMA_ZETA, simulate
 from cases.casefile.virtual_test import simulated_table
-from cases.double_beam.fe_levels import Simulator
-from cases.double_beam.fe_select import base_parameters, fe_noise, fit_base
+from cases.fe_loop.levels import Simulator
+from cases.fe_loop.select import base_parameters, fe_noise, fit_base
 from cases.registry import resolve_case
 from inverse.update import NoiseModel, UpdateProblem
 

@@ -21,13 +21,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import fe_response_synth as synth  # noqa: E402
 
-from cases.double_beam.update_study import UpdateSettings, run_update  # noqa: E402
+from cases.double_beam.fe_levels import DoubleBeamLevels  # noqa: E402
+from cases.fe_loop.update import UpdateSettings, run_update  # noqa: E402
 from ident.measured import write_measured  # noqa: E402
 
 
 def _run(path):
     t, c = time.perf_counter(), time.process_time()
-    r = run_update(UpdateSettings(data_path=path))
+    r = run_update(UpdateSettings(data_path=path), DoubleBeamLevels.from_data)
     return time.process_time() - c, time.perf_counter() - t, r
 
 

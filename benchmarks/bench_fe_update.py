@@ -20,7 +20,7 @@ campaign, and the cost of model updating, measured side by side in one run.
    levels is the bank's discretization plus the truncation to one harmonic, the top level
    (macro-slip) shows the truncation.
 
-2. **Model updating** (:func:`cases.double_beam.update_study.run_update`, fit levels 1-7,
+2. **Model updating** (:func:`cases.fe_loop.update.run_update`, fit levels 1-7,
    the defaults of ``iwanfe update --case double-beam``: the base model and every
    testable cause fitted and judged, the selected model's parameters on a bound
    profiled): wall time and CPU time (parent + workers) on a local process pool of 2
@@ -109,14 +109,15 @@ def campaign_benchmark(repeat: int) -> None:
 
 
 def update_benchmark() -> None:
-    from cases.double_beam.update_study import UPDATED_PARAMETERS, run_update
+    from cases.fe_loop.update import UPDATED_PARAMETERS
+    from cases.registry import resolve_case
     from runs.executor import ExecutorSpec
 
     print("2. model updating, fit levels 1-7 (model choice by the judge, bound profiles)")
     for spec in ("serial", ExecutorSpec("processes", 2)):
         ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         c0, w0 = time.process_time(), time.perf_counter()
-        r = run_update(executor=spec)
+        r = resolve_case("double-beam").require("update")(executor=spec)
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
         ch1 = resource.getrusage(resource.RUSAGE_CHILDREN)
         child = (ch1.ru_utime + ch1.ru_stime) - (ch0.ru_utime + ch0.ru_stime)

@@ -2,11 +2,11 @@
 
 :func:`resolve_case` gives a :class:`cases.case.Case` for a shipped name
 (:data:`SHIPPED`: each a case file, or a Python case such as the lumped 10-DOF model) or
-for a path to a ``.toml`` case file; the double beam adds its Python FE loop
-(``update``, ``fe_levels``, ``fe_check``), a case file with iwan4 joints and measured data
-gets the generic one (:mod:`cases.casefile.fe_loop`). The older helpers below serve the
-commands that stay with the double beam this session (``estimate --case``,
-``diagnose --backbone``):
+for a path to a ``.toml`` case file; a case file with iwan4 joints and measured data
+gets the generic FE loop (:mod:`cases.casefile.fe_loop` on :mod:`cases.fe_loop`), the
+double beam puts its Python FE-levels model in (``update``, ``fe_levels``) and adds its
+own ``fe_check`` and ``uncertainty`` (a stepped sine per sample). The older helpers
+below serve ``estimate --case``:
 :func:`build_case` builds the double beam's Python model (equal to its case file's to
 ~2e-8 in frequency, the calibrated clamp grip's last digits), :data:`MEASURED_DATA`,
 :func:`fe_check`. The case modules are imported only when a case is built.
@@ -50,6 +50,7 @@ def resolve_case(name_or_file: str):
             case.builders["fe_levels"] = _double_beam_levels
             case.builders["fe_check"] = lambda measured_omega2: fe_check(
                 "double-beam", measured_omega2)
+            case.builders["uncertainty"] = _double_beam_uncertainty
         return case
     if key == "lumped":
         return _lumped_case()
@@ -62,13 +63,27 @@ def resolve_case(name_or_file: str):
 
 
 def _double_beam_update(executor="serial", progress=False, store=None, **settings):
-    """``run_update`` of the double beam on its shipped data (``settings``: fields of
-    :class:`cases.double_beam.update_study.UpdateSettings`)."""
-    from cases.double_beam.update_study import UpdateSettings, run_update
+    """``run_update`` of the double beam's Python model on its shipped data, mode label 2,
+    fit levels 1-7 (``settings``: fields of :class:`cases.fe_loop.update.UpdateSettings`)."""
+    from cases.double_beam.fe_levels import DoubleBeamLevels, assumption_variants
+    from cases.double_beam.model import DoubleBeamConfig
+    from cases.double_beam.settings import DEFAULT_DATA
+    from cases.fe_loop.update import UpdateSettings, run_update
 
-    settings = {k: v for k, v in settings.items() if v is not None}
-    return run_update(UpdateSettings(**settings), executor=executor, progress=progress,
-                      store=store)
+    settings = {"data_path": str(DEFAULT_DATA), "mode_label": 2, "fit_levels": "1-7",
+                **{k: v for k, v in settings.items() if v is not None}}
+    variants = assumption_variants() if settings.get("assumptions") else None
+    return run_update(UpdateSettings(**settings), DoubleBeamLevels.from_data, executor=executor,
+                      progress=progress, store=store, case_name="double-beam",
+                      model_key=repr(DoubleBeamConfig()), assumptions=variants)
+
+
+def _double_beam_uncertainty(settings, **options):
+    """The double beam's Monte Carlo (:func:`cases.double_beam.uncertainty_report.
+    run_uncertainty`: a stepped sine per sample)."""
+    from cases.double_beam.uncertainty_report import run_uncertainty
+
+    return run_uncertainty(settings, **options)
 
 
 def _double_beam_levels(data, force_scale: float = 1.0):

@@ -42,8 +42,8 @@ def test_stuck_prediction_is_the_case_file_mode():
 
 
 def _fit(case, data, noise=None):
-    from cases.double_beam.fe_levels import Simulator
-    from cases.double_beam.fe_select import base_parameters, fe_noise, fit_base
+    from cases.fe_loop.levels import Simulator
+    from cases.fe_loop.select import base_parameters, fe_noise, fit_base
     from inverse.update import UpdateProblem
 
     fe = case.builders["fe_levels"](data)

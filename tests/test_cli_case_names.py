@@ -12,8 +12,6 @@ from cases.registry import SHIPPED
 ROOT = Path(__file__).resolve().parents[1]
 #: Known exceptions, each with its reason; the lead removes them after merging:
 KNOWN = {
-    # owned by the fejudge helper this session (uncertainty stays with the double beam):
-    "cli/commands/uncertainty.py",
     # reproduce TARGET names the paper's reproductions (double-beam, lumped), not --case:
     "cli/commands/reproduce.py",
 }

@@ -1,4 +1,4 @@
-"""The FE-level diagnosis (cases/double_beam/fe_diagnosis.py) and the update command.
+"""The FE-level diagnosis (cases/fe_loop/diagnosis.py) and the update command.
 
 Truth: virtual tests of the double beam made independently of the diagnosis
 (cases/double_beam/fe_synthetic.py: another glue discretization and K_T, Jenkins banks,
@@ -15,7 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from cases.double_beam.fe_diagnosis import default_fit_mask
+from cases.fe_loop.diagnosis import default_fit_mask
+from cases.double_beam.fe_levels import DoubleBeamLevels
 from cases.double_beam.fe_synthetic import draw_case
 from cli.main import main
 
@@ -56,10 +57,11 @@ def test_independent_hardening_plants_the_drawn_size():
 def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
     """An independent series (Jenkins-bank glue of another discretization and K_T,
     multi-harmonic stepped sine, repeatability noise) with nothing hidden: ``none``."""
-    from cases.double_beam.fe_diagnosis import fe_diagnosis
+    from cases.fe_loop.diagnosis import fe_diagnosis
 
     case = draw_case(1, "none")
-    r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool))["fe"]
+    r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
+                     levels=DoubleBeamLevels.from_data)["fe"]
     assert r["cause"] == "none" and r["fit_test"]["p_value"] > 1e-3
     assert r["failures"] == {"simulations": 0, "folds": 0, "fits": 0, "profile_points": 0}
 
@@ -114,10 +116,11 @@ def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
     status, the tie statement with the data's own numbers (loss of omega^2 273.1
     rad^2/s^2 = 0.73 x 2 omega^2 dzeta over levels 1-7), and the same cause and model as
     the FE-level diagnosis."""
-    from cases.double_beam.update_report import summary, write_update
-    from cases.double_beam.update_study import UpdateSettings, run_update
+    from cases.fe_loop.update_report import summary, write_update
+    from cases.registry import resolve_case
 
-    r = run_update(UpdateSettings(profile_points=2), store=str(tmp_path / "profiles"))
+    update = resolve_case("double-beam").require("update")
+    r = update(profile_points=2, store=str(tmp_path / "profiles"))
     s = summary(r)
     assert s["fit_levels"] == list(range(1, 8)) and s["held_out_levels"] == [8, 9, 10]
     assert s["tie"]["loss_omega2"] == pytest.approx(2506770.0 - 2506496.94)
@@ -137,9 +140,9 @@ def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
     model = json.loads((tmp_path / "updated_model.json").read_text())
     assert model["joint"]["K_T_N_per_m"] in (1e7, 1e8, 1e9)
     # update and diagnose --case name the same cause, and the written model is it
-    from cases.double_beam.fe_diagnosis import fe_diagnosis
+    from cases.fe_loop.diagnosis import fe_diagnosis
 
-    fe = fe_diagnosis(r["data"], mask=r["fit_mask"])["fe"]
+    fe = fe_diagnosis(r["data"], mask=r["fit_mask"], levels=DoubleBeamLevels.from_data)["fe"]
     assert model["cause"] == s["cause"] == fe["cause"]
     assert model["model"] == fe["candidate"]
     for name, p in fe["parameters"].items():

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 import fe_response_synth as synth
-from cases.double_beam.fe_levels import DoubleBeamLevels, abscissa_of
+from cases.double_beam.fe_levels import DoubleBeamLevels
+from cases.fe_loop.levels import abscissa_of
 from fe.hb_resonance import resonance_levels
 from fe.hb_response import response_levels
 from ident.measured import write_measured
@@ -117,10 +118,10 @@ def test_update_recovers_chi_from_a_free_decay_series(tmp_path, capsys):
 def test_update_recovers_chi_from_a_random_series(tmp_path):
     """A random series (response RMS a third of the free decay's amplitudes): chi within
     0.05 of the planted -0.45 through the Rayleigh route."""
-    from cases.double_beam.update_study import UpdateSettings, run_update
+    from cases.fe_loop.update import UpdateSettings, run_update
 
     path = tmp_path / "random.csv"
     write_measured(path, synth.series("random", amplitudes=synth.AMPLITUDES / 3))
-    r = run_update(UpdateSettings(data_path=str(path)))
+    r = run_update(UpdateSettings(data_path=str(path)), DoubleBeamLevels.from_data)
     assert abs(r["fit"].values["chi"] - synth.CHI) < 0.05
     assert r["fit"].failed_simulations == 0

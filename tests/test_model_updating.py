@@ -1,5 +1,5 @@
 """Model updating (inverse/update.py, inverse/profile.py) and the FE double beam by
-parameters (cases/double_beam/fe_levels.py).
+parameters (cases/fe_loop/levels.py, the double beam's cases/double_beam/fe_levels.py).
 
 Truths: planted parameters of a closed-form simulator (the modal Iwan relations, paper
 eq. 30-32 with eq. 45 corrected) and of the FE simulation itself, planted noise levels,
@@ -131,7 +131,7 @@ def test_fe_stuck_frequency_and_level_one(fe):
 def test_fe_update_recovers_planted_fe_parameters(fe):
     """Levels simulated by the FE model with planted values and noise: the base fit
     returns them within 3.5 standard errors."""
-    from cases.double_beam.fe_levels import Simulator
+    from cases.fe_loop.levels import Simulator
 
     rng = np.random.default_rng(5)
     truth = fe.predict(BASE)
@@ -245,9 +245,10 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
     """An FE cause whose parameter step is not a number (as a degenerate base fit can
     make it): the FE model choice goes on, that candidate is reported as a failed fit
     with the reason, and the failure is counted."""
-    from cases.double_beam import fe_causes
-    from cases.double_beam.fe_diagnosis import report
-    from cases.double_beam.fe_select import fe_select
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+    from cases.fe_loop import causes as fe_causes
+    from cases.fe_loop.diagnosis import report
+    from cases.fe_loop.select import fe_select
     from ident.modal_data import MeasuredData
 
     monkeypatch.setattr(fe_causes.CubicHardening, "step",
@@ -259,7 +260,8 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
                         * (1 + 5e-6 * rng.standard_normal(10)),
                         zeta=ze * (1 + 2e-4 * rng.standard_normal(10)),
                         mode=np.ones(10, dtype=int), run_order=np.arange(1, 11))
-    s = fe_select(data, np.arange(10) < 7, causes=("geometric-hardening",))
+    s = fe_select(data, np.arange(10) < 7, DoubleBeamLevels.from_data(data),
+                  causes=("geometric-hardening",))
     c = s["extensions"]["geometric-hardening"][1]
     assert c.fit is None and "step" in c.excluded
     fe = report(data, np.arange(10) < 7, s)["fe"]

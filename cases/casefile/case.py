@@ -42,5 +42,6 @@ def case_from_file(path) -> Case:
     if fe_loop.qualifies(cf):
         builders["fe_levels"] = fe_loop.levels_builder(cf)
         builders["update"] = fe_loop.update_builder(cf)
+        builders["fe_uncertainty"] = fe_loop.uncertainty_builder(cf)
     return Case(name=cf.name, description=cf.description, source=str(cf.path),
                 builders=builders, file=cf)

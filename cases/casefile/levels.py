@@ -1,13 +1,13 @@
 """The FE-levels model of any case file with four-parameter Iwan joints: omega^2 and
 zeta of the measured mode at every force level, as a function of the fit parameters.
 
-:class:`CaseLevels` is :class:`cases.double_beam.fe_levels.DoubleBeamLevels` (the
+:class:`CaseLevels` is a :class:`cases.fe_loop.levels.FELevels` (the
 parameters ``chi``, ``ln_dc1`` = ``|kappa1| B~`` of the joints at level 1 (paper eq.
 30-32, 37), ``zeta_v``, ``f0_hz``, optional ``log10_kt``, ``ln_phimax``; the
 first-harmonic balance with the exact describing function at phase resonance,
 :func:`fe.hb_resonance.resonance_levels`) with the structure taken from a case file
 instead of the double beam's Python model, so the one judge
-(:func:`cases.double_beam.fe_select.fe_select`) and ``run_update`` run on it:
+(:func:`cases.fe_loop.select.fe_select`) and ``run_update`` run on it:
 
 * ``K_T`` (``log10_kt``) is the total stuck stiffness of every joint element of every
   joint interface; a value other than the file's scales every interface's ``kt`` alike
@@ -31,7 +31,7 @@ import numpy as np
 
 from cases.casefile.build import build_model
 from cases.casefile.calibrate import calibrate
-from cases.double_beam.fe_levels import DoubleBeamLevels, abscissa_of
+from cases.fe_loop.levels import FELevels, abscissa_of
 
 __all__ = ["total_kt", "CaseLevels"]
 
@@ -52,10 +52,10 @@ def _lambda3(model, phi) -> float:
     return total
 
 
-class CaseLevels(DoubleBeamLevels):
+class CaseLevels(FELevels):
     """The measured series' levels simulated by the case file's FE model (module
     docstring). ``cf``: a checked :class:`cases.casefile.spec.CaseFile` with joint
-    interfaces; the other arguments as :class:`DoubleBeamLevels`."""
+    interfaces; the other arguments as :class:`FELevels`."""
 
     def __init__(self, cf, excitation, run_order, omega2_1: float, zeta_1: float,
                  force_scale: float = 1.0, n_modes: int = 40):

@@ -53,6 +53,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from cases.double_beam.settings import SOURCE_METHOD, DoubleBeamStudy
+from cases.fe_loop.levels import phi_max_of
 from fe.reduction import JointBank, JointedSystem, ritz_basis
 from ident.measured import MeasuredData
 from inverse.estimate import estimate
@@ -127,20 +128,6 @@ class JointSetup:
             "source_kappa1_B": self.source.kappa1_B,
             "slip_level1_linear": self.slip_level1_linear,
         }
-
-
-def phi_max_of(K_T, R, chi, beta) -> float:
-    """Eq. (1): ``(K_T (chi+1) / ((1+beta) R))^(1/(chi+1))`` (m); ValueError (one line)
-    if that is not a positive normal double."""
-    try:
-        pm = (K_T * (chi + 1.0) / ((1.0 + beta) * R)) ** (1.0 / (chi + 1.0))
-    except (OverflowError, ZeroDivisionError):
-        pm = math.inf
-    if not (math.isfinite(pm) and pm >= 2.3e-308):
-        raise ValueError(f"the glue joint's phi_max = (K_T (chi+1)/((1+beta) R))^(1/(chi+1)) "
-                         f"with K_T = {K_T:g} N/m, R = {R:g}, chi = {chi:g}, beta = {beta:g} is "
-                         f"outside double precision (check --R, --chi, --force-scale)")
-    return pm
 
 
 def source_estimate(model, data: MeasuredData, study: DoubleBeamStudy, **options):

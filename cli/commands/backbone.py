@@ -205,14 +205,14 @@ def run_response_control(args) -> int:
 
 
 def format_prediction(pred: dict) -> str:
-    """Table of :func:`cases.backbone_prediction.predict_from_backbone` (``estimate
-    --backbone``)."""
+    """Table of :func:`cases.fe_loop.backbone.predict_from_backbone` (``estimate
+    --backbone``, ``diagnose --backbone``)."""
     def f(x, spec):
         return "n/a" if x is None else format(x, spec)
 
     lines = ["", f"FE backbone prediction ({pred['case']}, FE mode {pred['fe_mode']}, EPMC "
              f"{pred['path']} path, {pred['points']} points): the estimated joint chi = "
-             f"{pred['chi']:.5f}, R~ = {pred['R']:.4g} in every glue element, read at the "
+             f"{pred['chi']:.5f}, R~ = {pred['R']:.4g} over the joint elements, read at the "
              f"resonance of each level's force",
              " level  held  force_N   omega^2 pred    omega^2 meas    zeta pred %  "
              "zeta meas %  slip/phi_max"]

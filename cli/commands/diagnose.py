@@ -177,7 +177,7 @@ def format_text(r: dict, source: str) -> str:
 
         lines.extend(format_fe_check(r["fe_check"]))
     if "fe" in r:
-        from cases.double_beam.fe_diagnosis_report import format_fe
+        from cases.fe_loop.diagnosis_report import format_fe
         lines.extend(format_fe(r["fe"]))
     return "\n".join(lines)
 
@@ -211,20 +211,23 @@ def write_report(result: dict, out: Path, source: str) -> list[Path]:
 def _backbone_prediction(args, data, mode) -> dict:
     """``--backbone``: the estimator's joint (method exact, all levels but the top three,
     B~ from the case's FE model) put into the FE model, every level read off its EPMC
-    backbone (:func:`cases.backbone_prediction.predict_from_backbone`)."""
-    if args.case is None or not args.files:
+    backbone (:func:`cases.fe_loop.backbone.predict_from_backbone` on the case's
+    FE-levels model)."""
+    case = model_case(args.case)
+    if case is None or not args.files:
         raise InputError("--backbone needs FILE and --case")
-    from cases.backbone_prediction import predict_from_backbone
-    from cases.registry import build_case
+    from cases.fe_loop.backbone import predict_from_backbone
     from inverse.estimate import estimate
+
+    levels = case.require("fe_levels")
 
     d = data.for_mode(mode)
     if len(d) < 6:
         raise InputError(f"--backbone: mode {mode} has {len(d)} levels; the fit needs at "
                          "least 3 below the 3 held out")
     est = estimate(data, fit_levels=[int(v) for v in d.level[:-3]], method="exact",
-                   mode=mode, model=build_case(args.case), case_name=args.case)
-    return predict_from_backbone(data, est, args.case)
+                   mode=mode, model=case.fe_model(), case_name=case.name)
+    return predict_from_backbone(data, est, levels, case_name=case.name)
 
 
 def run(args) -> int:
@@ -242,7 +245,7 @@ def run(args) -> int:
         result["fe_check"] = case.builders["fe_check"](float(level1.omega2[0]))
     if case is not None and "fe_levels" in case.capabilities:
         # the FE model refitted, base vs extended (issue 13), by the one judge
-        from cases.double_beam.fe_diagnosis_report import add_fe_diagnosis
+        from cases.fe_loop.diagnosis_report import add_fe_diagnosis
         add_fe_diagnosis(result, data, out=args.out, levels=case.builders["fe_levels"],
                          model_key=case.source)
     if args.backbone:

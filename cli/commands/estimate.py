@@ -116,14 +116,17 @@ def _kappa_label(est) -> str:
 
 
 def _backbone(args, data, est):
-    """The backbone predictions of ``--backbone`` (cases.backbone_prediction), or None."""
+    """The backbone predictions of ``--backbone`` (:mod:`cases.fe_loop.backbone` on the
+    case's FE-levels model), or None."""
     if not args.backbone:
         return None
     if args.case is None:
         raise ValueError("--backbone needs --case (the FE model the joint is put into)")
-    from cases.backbone_prediction import predict_from_backbone
+    from cases.fe_loop.backbone import predict_from_backbone
+    from cases.registry import resolve_case
 
-    return predict_from_backbone(data, est, args.case, args.force_scale)
+    levels = resolve_case(args.case).require("fe_levels")
+    return predict_from_backbone(data, est, levels, args.force_scale, case_name=args.case)
 
 
 def format_table(est, source: str = "") -> str:

@@ -2,10 +2,13 @@
 
 Draws joint parameters (chi, R~) from the fit uncertainty of the ``exact`` estimate of
 the fit levels (``iwanfe estimate``: paper eq. 33-37), simulates each sample with the
-nonlinear FE double beam through every level (harmonic-balance stepped sine, modal
-filter), and prints per level the measured value, the nominal FE prediction, the sample
-median and central interval, and the estimator's closed-form (delta-method) interval
-(:mod:`cases.double_beam.uncertainty`). Every finished sample is stored under ``--out``; a rerun
+case's nonlinear FE model through every level and prints per level the measured value,
+the nominal FE prediction, the sample median and central interval. A case with its own
+``uncertainty`` capability (the double beam: a harmonic-balance stepped sine and modal
+filter per sample, with the estimator's closed-form interval beside,
+:mod:`cases.double_beam.uncertainty`) runs that; any other case with an FE-levels model
+(a case file with iwan4 joints) runs :mod:`cases.fe_loop.uncertainty` (exact describing
+function at phase resonance). Every finished sample is stored under ``--out``; a rerun
 computes only the missing ones.
 """
 from __future__ import annotations
@@ -21,11 +24,11 @@ from cli.executor_options import add_executor_arguments, executor_from_args, int
 from runs.jsonio import print_json
 
 NAME = "uncertainty"
-CASES = ("double-beam",)
 
 
 def register(subparsers) -> None:
     from cases.double_beam.uncertainty import DEFAULT_CONFIDENCE, DEFAULT_SAMPLES, DEFAULT_SEED
+    from cases.registry import DEFAULT_CASE
     from inverse.uncertainty import DISTRIBUTIONS
 
     parser = subparsers.add_parser(
@@ -36,26 +39,33 @@ def register(subparsers) -> None:
             "Draw joint parameters (chi, R~) from the fit uncertainty of the 'exact' "
             "estimate of the fit levels (Student t with the fit's degrees of freedom and "
             "linearized covariance of (chi+1, ln((chi+1)|kappa1|B)), truncated to -1 < chi "
-            "< 0), simulate every sample with the nonlinear FE double beam through all "
-            "levels (harmonic-balance stepped sine, modal filter), and report per level the "
-            "measured value, the nominal FE prediction, the sample median and central "
-            "interval, and the estimator's closed-form delta-method interval (paper eq. 43, "
-            "46). Writes uncertainty.json and uncertainty.png under --out and stores every "
+            "< 0), simulate every sample with the case's nonlinear FE model through all "
+            "levels, and report per level the measured value, the nominal FE prediction, "
+            "the sample median and central interval. The double beam: harmonic-balance "
+            "stepped sine and modal filter per sample, beside the estimator's closed-form "
+            "delta-method interval (paper eq. 43, 46); a case file: exact describing "
+            "function at phase resonance (its FE-levels model, ms per sample). "
+            "Writes uncertainty.json (and for the double beam uncertainty.png) under --out "
+            "and stores every "
             "finished sample there: a rerun computes only the missing ones, and more "
             "--samples extends a finished run."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     parser.add_argument("file", metavar="FILE", nargs="?", default=None,
-                        help="measured-data CSV (default: the shipped paper data "
-                             "cases/data/double_beam_measured.csv)")
-    parser.add_argument("--case", choices=CASES, default="double-beam",
-                        help="FE model of the per-sample simulation")
+                        help="measured-data CSV (default: the case's measured data)")
+    parser.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
+                        help="FE model of the per-sample simulation: a shipped case or a "
+                             "case file (.toml)")
+    parser.add_argument("--mode", type=int, default=None,
+                        help="mode label in the data (case files; default: the case's)")
     parser.add_argument("--samples", type=int_at_least(1), default=DEFAULT_SAMPLES, metavar="N",
                         help="Monte Carlo samples (one nonlinear simulation each)")
     parser.add_argument("--seed", type=int_at_least(0), default=DEFAULT_SEED, metavar="S",
                         help="root seed (each sample has its own stream)")
-    parser.add_argument("--fit-levels", default="1-7", metavar="LEVELS",
-                        help="levels of the chi fit; the others are predicted")
+    parser.add_argument("--fit-levels", default=None, metavar="LEVELS",
+                        help="levels of the chi fit; the others are predicted (default: "
+                             "1-7 for the double beam; a case file: all but the top three "
+                             "levels)")
     parser.add_argument("--confidence", type=float, default=DEFAULT_CONFIDENCE,
                         help="central interval of the samples and level of the "
                              "delta-method interval, in (0, 1) (0.9: 5-95 %%)")
@@ -69,7 +79,8 @@ def register(subparsers) -> None:
                         help="output directory (report, plot, sample store)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    sim = parser.add_argument_group("per-sample simulation (defaults: module docstring of "
+    sim = parser.add_argument_group("per-sample stepped sine of a case with its own "
+                                    "uncertainty capability (defaults: module docstring of "
                                     "cases.double_beam.uncertainty)")
     sim.add_argument("--band", type=float, nargs=2, default=None, metavar=("LO", "HI"),
                      help="stepped-sine lines and band, Hz (default 236 268)")
@@ -90,7 +101,7 @@ def _settings(args):
     kw = {}
     if args.file is not None:
         kw["data_path"] = str(validate.input_file(args.file))
-    kw["fit_levels"] = args.fit_levels
+    kw["fit_levels"] = args.fit_levels or "1-7"
     for name, key in (("force_scale", "force_scale"), ("df", "df_hz"),
                       ("sliders_per_octave", "sliders_per_octave")):
         v = getattr(args, name)
@@ -118,7 +129,7 @@ def _f(x, spec):
     return "nan" if x is None or not math.isfinite(x) else format(x, spec)
 
 
-def text_report(rep, source: str, files, wall: float) -> str:
+def text_report(rep, source: str, files, wall: float, case_name: str) -> str:
     """The readable report of an :class:`~cases.double_beam.uncertainty_report.UncertaintyReport`."""
     st, src, dist = rep.settings, rep.source, rep.distribution
     c = st.confidence
@@ -126,7 +137,7 @@ def text_report(rep, source: str, files, wall: float) -> str:
     iv = f"{lo:g}..{hi:g} %"
     ci = src.chi_interval
     study = st.study
-    lines = [f"iwanfe uncertainty {source}  case double-beam  {src.method} estimate of levels "
+    lines = [f"iwanfe uncertainty {source}  case {case_name}  {src.method} estimate of levels "
              f"{study.fit_levels}",
              f"  chi = {src.chi:.4f} ({c:.0%} t-interval {ci[0]:.3f} .. {ci[1]:.3f}), "
              f"|kappa1|B = {src.kappa1_B:.4g} 1/s^2, R~ = {src.R:.4g} N/m^(chi+2), "
@@ -217,9 +228,18 @@ def write_outputs(rep, out: Path) -> list[Path]:
 
 
 def run(args) -> int:
-    from cases.double_beam.settings import DEFAULT_DATA
-    from cases.double_beam.uncertainty_report import run_uncertainty
+    from cases.registry import resolve_case
 
+    case = resolve_case(args.case)
+    if "uncertainty" not in case.capabilities:
+        from cli.commands.uncertainty_levels import run_levels
+
+        return run_levels(args, case)
+    from cases.double_beam.settings import DEFAULT_DATA
+
+    run_uncertainty = case.require("uncertainty")
+    if args.mode is not None:
+        raise ValueError(f"--mode: case {case.name!r} studies its own mode")
     t0 = time.perf_counter()
     settings = _settings(args)
     executor = executor_from_args(args)
@@ -240,5 +260,5 @@ def run(args) -> int:
         d["files"] = [str(f) for f in files]
         print_json(d)
     else:
-        print(text_report(rep, source, files, wall))
+        print(text_report(rep, source, files, wall, case.name))
     return 0

@@ -1,8 +1,8 @@
 """``iwanfe update``: the FE model's joint, damping and frequency fitted to measured levels.
 
 Parses, asks the case (:func:`cases.registry.resolve_case`) for its ``update``
-capability (:func:`cases.double_beam.update_study.run_update` on its FE-levels model),
-prints (:mod:`cases.double_beam.update_report`).
+capability (:func:`cases.fe_loop.update.run_update` on its FE-levels model),
+prints (:mod:`cases.fe_loop.update_report`).
 """
 from __future__ import annotations
 
@@ -61,15 +61,15 @@ def register(subparsers) -> None:
                         help="profile likelihoods of the fitted parameters on a bound "
                              "(others linearized), or of all of them and of K_T (slower)")
     parser.add_argument("--assumptions", action="store_true",
-                        help="also refit under changed assumed properties (E, rho, masses, "
-                             "glue elements; slower)")
+                        help="also refit under each assumed property of the case changed "
+                             "(E, rho, masses, joint elements; slower)")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     add_executor_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from cases.double_beam.update_report import format_text, summary, write_update
+    from cases.fe_loop.update_report import format_text, summary, write_update
     from cases.registry import resolve_case
 
     update = resolve_case(args.case).require("update")

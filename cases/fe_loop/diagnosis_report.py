@@ -1,6 +1,6 @@
-"""Wording and files of the FE-level diagnosis (``iwanfe diagnose ... --case double-beam``).
+"""Wording and files of the FE-level diagnosis (``iwanfe diagnose FILE --case NAME|FILE``).
 
-:func:`add_fe_diagnosis` runs :func:`cases.double_beam.fe_diagnosis.fe_diagnosis` on the
+:func:`add_fe_diagnosis` runs :func:`cases.fe_loop.diagnosis.fe_diagnosis` on the
 diagnosed mode and puts ``fe_levels`` and ``fe`` into the diagnosis result;
 :func:`format_fe` gives its text lines, :func:`write_fe_files` its markdown section and
 the figure ``fe_levels.png`` (measured vs base FE vs extended FE per level).
@@ -29,9 +29,9 @@ def _digest(d) -> str:
 def add_fe_diagnosis(result: dict, data, out=None, levels=None, model_key: str = "") -> dict:
     """Add ``fe_levels`` and ``fe`` (FE cause, gains, held-out errors) to ``result``;
     with ``out`` also write :func:`write_fe_files`. ``levels``: the FE-levels model of
-    :func:`cases.double_beam.fe_diagnosis.fe_diagnosis`, ``model_key`` names it (for the
+    :func:`cases.fe_loop.diagnosis.fe_diagnosis`, ``model_key`` names it (for the
     reuse of a finished diagnosis). Returns ``result``."""
-    from cases.double_beam.fe_diagnosis import fe_diagnosis
+    from cases.fe_loop.diagnosis import fe_diagnosis
 
     mode = result.get("mode")
     d = data.for_mode(int(mode)) if mode is not None else data
@@ -51,7 +51,7 @@ def _g(v, spec=".3g"):
 def format_fe(fe: dict) -> list:
     """Text lines of the FE-level diagnosis."""
     ft = fe["fit_test"]
-    lines = [f"FE level ({fe.get('model', 'double beam')} refitted; fit levels "
+    lines = [f"FE level ({fe.get('model', 'FE model')} refitted; fit levels "
              f"{fe['fit_levels']}, held out {fe['held_out_levels']}; judged by {fe['rule']}):",
              f"  FE cause: {fe['cause']}" + (f" + {', '.join(fe['also'])}" if fe["also"] else "")
              + (f" (closest candidate: {fe['candidate']}, {fe['closest_miss']['why']})"
@@ -143,7 +143,7 @@ def write_fe_files(result: dict, out: Path) -> list:
                       [r["held_out"] for r in rows],
                       title=f"measured vs base FE vs extended FE ({fe['cause']})", path=png)
     md = out / "fe_diagnosis.md"
-    md.write_text(f"# FE-level diagnosis ({fe.get('model', 'double beam')})\n\n" + "\n".join(
+    md.write_text(f"# FE-level diagnosis ({fe.get('model', 'FE model')})\n\n" + "\n".join(
         ("    " + ln) for ln in format_fe(fe)) + "\n\n![FE levels](fe_levels.png)\n",
         encoding="utf-8")
     return [png, md]

@@ -1,8 +1,8 @@
-"""The FE-level model choice shared by ``diagnose --case double-beam`` and ``update``.
+"""The FE-level model choice shared by ``diagnose --case`` and ``update`` (any case).
 
 :func:`fe_select` fits, on the fit levels, the base FE model
-(:mod:`cases.double_beam.fe_levels`) and the FE realization of every cause the data can
-test (:mod:`cases.double_beam.fe_causes`), then pairs of the best single cause with
+(:mod:`cases.fe_loop.levels`) and the FE realization of every cause the data can
+test (:mod:`cases.fe_loop.causes`), then pairs of the best single cause with
 each other cause that earned its cost alone (unless the best single is already so good
 that no pair could outweigh it), and lets the one judge choose
 (:func:`inverse.fe_selection.judge_extensions` -> :func:`inverse.judge.select`: fit
@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cases.double_beam.fe_causes import EXTENSIONS, Combined
-from cases.double_beam.fe_levels import BASE_PARAMETERS, DEFAULT_KT, DoubleBeamLevels, Simulator
+from cases.fe_loop.causes import EXTENSIONS, Combined
+from cases.fe_loop.levels import BASE_PARAMETERS, FELevels, Simulator
 from inverse import judge
 from inverse.fe_selection import FitCandidate, judge_extensions
 from inverse.estimate import estimate
@@ -41,7 +41,7 @@ __all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable
 MICRO_LIMIT = 50.0
 
 
-def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
+def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
     """Parameters of the base model and their starts; the start list holds the paper's
     estimator (``exact``, the fit levels) and three others of chi."""
     lv = [int(v) for v in data.level[mask]]
@@ -57,17 +57,17 @@ def base_parameters(data, mask, fe: DoubleBeamLevels) -> tuple[dict, list]:
         est = None
     P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
          "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
-                             "ln |kappa1| B~ at level 1: the glue's modal damping there"),
+                             "ln |kappa1| B~ at level 1: the joints' modal damping there"),
          "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
                              "viscous modal damping ratio"),
          "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
-                            "stuck-glue natural frequency of the mode"),
-         "log10_kt": Parameter("log10_kt", math.log10(getattr(fe, "default_kt", DEFAULT_KT)),
+                            "stuck-joint natural frequency of the mode"),
+         "log10_kt": Parameter("log10_kt", math.log10(fe.default_kt),
                                6.0, 11.0, 0.5, "log10 N/m",
-                               "stuck tangential stiffness of the whole glue"),
+                               "stuck tangential stiffness of all joints together"),
          "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
                                 "1", "ln(phi_max / a_ref): macro-slip onset in units of "
-                                "the level-1 glue slip (beta = 0 above its limit)")}
+                                "the level-1 joint slip (beta = 0 above its limit)")}
     starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
     return P, starts
 
@@ -78,7 +78,7 @@ class Headline:
     parameter set: frequency (Hz) and zeta at the held-out levels, top slip over
     phi_max, R~ and phi_max (picklable)."""
 
-    fe: DoubleBeamLevels
+    fe: FELevels
     held_out: np.ndarray
     extension: object = None
 
@@ -160,7 +160,7 @@ def _inactive(ext, f) -> bool:
         (ext.cause == "macro-slip" and f.at_bound.get("ln_phimax") == "upper")
 
 
-def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
+def fe_select(data, mask, fe: FELevels, causes=None,
               progress=None) -> dict:
     """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring).
 
@@ -169,7 +169,7 @@ def fe_select(data, mask, fe: DoubleBeamLevels | None = None, causes=None,
     :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason) and
     ``chosen`` (name of the selected candidate: the closest one when unexplained)."""
     try:
-        return _select(data, mask, fe or DoubleBeamLevels.from_data(data), causes,
+        return _select(data, mask, fe, causes,
                        progress or (lambda s: None))
     except ValueError as exc:          # the input was checked before: ours, not the user's
         raise InternalError(f"internal failure in the FE model choice: {exc}") from exc

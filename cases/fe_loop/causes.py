@@ -1,7 +1,7 @@
-"""The causes of the diagnosis catalogue as FE physics of the double beam.
+"""The causes of the diagnosis catalogue as FE physics of any jointed FE model.
 
 Each cause of ``shared/spec/diagnosis.md`` with a physical mechanism becomes one
-:class:`Extension` of the FE model of :mod:`cases.double_beam.fe_levels`: one extra
+:class:`Extension` of the FE-levels model (:mod:`cases.fe_loop.levels`): one extra
 parameter (nested: its ``none`` value gives back the base model), a realization in the
 first-harmonic balance (:mod:`fe.hb_resonance`: an element, a per-level stiffness scale
 or a per-level force) and the physical reading of the fitted value. SI units. Each
@@ -13,7 +13,7 @@ class here.
 ``macro-slip`` (:class:`MacroSlip`). The four-parameter Iwan joint leaves micro-slip at
 ``phi_max`` (Segalman 2005, J. Appl. Mech. 72, 752: beyond it the joint slides as a
 whole at ``F_S``). The base model has ``beta = 0``, the largest ``phi_max`` the stuck
-stiffness allows (:mod:`cases.double_beam.joint_setup`, eq. 1); the extension frees
+stiffness allows (:func:`cases.fe_loop.levels.phi_max_of`, eq. 1); the extension frees
 ``ln(1+beta)``: a Dirac share of the density that lowers ``phi_max`` and ``F_S`` and
 brings macro-slip into the tested levels.
 

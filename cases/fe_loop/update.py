@@ -1,32 +1,33 @@
-"""Model updating of the FE double beam: the glue joint, the damping and the frequency
+"""Model updating of any case's FE model: the joints, the damping and the frequency
 fitted to the measured levels by the nonlinear FE simulation itself, in the form the one
 judge selects.
 
-:func:`run_update` (``iwanfe update --case double-beam``):
+:func:`run_update` (``iwanfe update --case NAME|FILE``; the case gives its FE-levels
+model, :class:`cases.fe_loop.levels.FELevels`, and its data):
 
-1. the measured mode's levels (:func:`cases.double_beam.settings.measured_levels`) and
-   the fit levels (default 1-7);
-2. the model choice of :func:`cases.double_beam.fe_select.fe_select`, the same as
-   ``diagnose --case double-beam``: the base FE model (one continuous Iwan element per
-   glue node, viscous modal damping, first-harmonic balance at phase resonance; ``chi``,
-   ``ln_dc1`` = ``|kappa1| B~`` at level 1, ``zeta_v``, ``f0_hz`` fitted at the assumed
-   ``K_T = 1e8 N/m``) and each testable cause's FE realization, judged by
+1. the measured mode's levels and the fit levels;
+2. the model choice of :func:`cases.fe_loop.select.fe_select`, the same as
+   ``diagnose --case``: the base FE model (one continuous Iwan element per joint
+   element, viscous modal damping, first-harmonic balance at phase resonance; ``chi``,
+   ``ln_dc1`` = ``|kappa1| B~`` at level 1, ``zeta_v``, ``f0_hz`` fitted at the case's
+   assumed ``K_T``) and each testable cause's FE realization, judged by
    :func:`inverse.judge.select` (fit test, cost per cause, held-out gain > 1, noise of
    :func:`inverse.judge.noise_model`). The updated model is the selected one (the
    closest candidate when the answer is ``unexplained``, and the report says so);
 3. profile likelihoods (:mod:`inverse.profile`) of the fitted parameters on a bound,
    as executor tasks; the others get linearized intervals. With ``--profiles all``:
-   of every fitted parameter, and of ``log10_kt`` (each K_T its own model, grip
-   re-calibrated to 252.0 Hz; a grid value is adopted only when it lowers chi2 by more
+   of every fitted parameter, and of ``log10_kt`` (each K_T its own model, calibrated
+   again as the case calibrates; a grid value is adopted only when it lowers chi2 by more
    than the cost of one parameter, :data:`FREE_COST`; K_T is then *fitted* on the grid);
 4. along the profiles of what the data do not determine, the range of every headline
    figure: predicted frequency and damping at the held-out levels, top slip over
    ``phi_max``;
 5. with ``--assumptions``, the same figures after refitting with each assumed
-   property changed (:mod:`cases.double_beam.update_assumptions`).
+   property of the case changed (:mod:`cases.fe_loop.assumptions`; the changes are the
+   case's ``assumptions`` capability).
 
 The force scale (N per excitation unit) is not a parameter: every simulated omega^2 and
-zeta is exactly invariant to it (:mod:`cases.double_beam.joint_setup`); R~, phi_max and
+zeta is exactly invariant to it (:mod:`cases.fe_loop.levels`); R~, phi_max and
 F_S are stated at the assumed 1 N/V and scale as ``s^-(chi+1)``, ``s``, ``s``.
 """
 from __future__ import annotations
@@ -38,11 +39,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cases.double_beam.fe_causes import MacroSlip
-from cases.double_beam.fe_levels import BASE_PARAMETERS, DoubleBeamLevels, abscissa_of
-from cases.double_beam.fe_select import Headline, chosen_model, fe_select
-from cases.double_beam.model import DoubleBeamConfig
-from cases.double_beam.settings import DEFAULT_DATA
+from cases.fe_loop.causes import MacroSlip
+from cases.fe_loop.levels import BASE_PARAMETERS, abscissa_of
+from cases.fe_loop.select import Headline, chosen_model, fe_select
 from ident.measured import read_measured
 from inverse.estimate import parse_levels
 from inverse.profile import linear_grid, run_profiles
@@ -57,8 +56,8 @@ KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 1.0), 6))
 
 @dataclass(frozen=True)
 class UpdateSettings:
-    """What ``iwanfe update`` fits: the data (default the shipped paper data, mode label
-    2), the fit levels, the force scale (N per excitation unit, assumed), the profile
+    """What ``iwanfe update`` fits: the data (the case's table, its mode label), the fit
+    levels, the force scale (N per excitation unit, assumed), the profile
     confidence, the K_T grid (log10 N/m), the points per profile branch, whether to
     refit under changed assumptions, which parameters to profile (``bound``: those on a
     bound; ``all``)."""
@@ -85,7 +84,9 @@ class UpdateSettings:
 
 def load_levels(settings: UpdateSettings):
     """The measured levels and the fit mask."""
-    data = read_measured(settings.data_path or DEFAULT_DATA).for_mode(settings.mode_label)
+    if settings.data_path is None:
+        raise ValueError("no measured data: give --data (the case names none)")
+    data = read_measured(settings.data_path).for_mode(settings.mode_label)
     abscissa_of(data)                      # a series no FE route models: one line
     if len(data) < 5:
         raise ValueError(f"mode {settings.mode_label}: {len(data)} levels in the data, "
@@ -115,7 +116,7 @@ def problem_digest(data, mask, settings: UpdateSettings, model: str = "") -> str
     h = hashlib.sha256(b"iwanfe-update/1")
     for a in (data.level, data.excitation, data.omega2, data.zeta, data.run_order, mask):
         h.update(np.ascontiguousarray(a, dtype=float).tobytes())
-    h.update(repr((settings, model or DoubleBeamConfig())).encode())
+    h.update(repr((settings, model)).encode())
     return h.hexdigest()
 
 
@@ -137,19 +138,22 @@ def _adopt(problem, best, profiles):
     return best
 
 
-def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
-               progress: bool = False, store=None, levels=None, case_name: str = "double-beam",
-               model_key: str = "") -> dict:
+def run_update(settings: UpdateSettings, levels, executor="serial", progress: bool = False,
+               store=None, case_name: str = "", model_key: str = "", assumptions=None) -> dict:
     """Select, fit, profile and assess the FE model (module docstring). ``store``: a
     directory where finished profile branches are kept (a rerun loads them);
-    ``levels(data, force_scale=)``: the FE-levels model (default the double beam's,
-    :class:`DoubleBeamLevels`; a case file's: :class:`cases.casefile.levels.CaseLevels`),
-    ``case_name`` and ``model_key`` (what the model is built from, for the store's
-    digest) go with it. Returns a dict (rendered by
-    :mod:`cases.double_beam.update_report`)."""
+    ``levels(data, force_scale=)``: the case's FE-levels model
+    (:class:`cases.fe_loop.levels.FELevels`), ``case_name`` and ``model_key`` (what the
+    model is built from, for the store's digest) go with it; ``assumptions``: name ->
+    ``levels`` under a changed assumed property (:mod:`cases.fe_loop.assumptions`),
+    needed when ``settings.assumptions``. Returns a dict (rendered by
+    :mod:`cases.fe_loop.update_report`)."""
     t0 = time.perf_counter()
     data, mask = load_levels(settings)
-    fe = (levels or DoubleBeamLevels.from_data)(data, force_scale=settings.force_scale)
+    if settings.assumptions and not assumptions:
+        raise ValueError(f"case {case_name!r} names no assumed property to change "
+                         "(--assumptions)")
+    fe = levels(data, force_scale=settings.force_scale)
     sel = fe_select(data, mask, fe)
     ext, chosen = chosen_model(sel)
     problem, best, noise = chosen.problem, chosen.fit, sel["noise"]
@@ -173,10 +177,10 @@ def run_update(settings: UpdateSettings = UpdateSettings(), executor="serial",
     t_prof = time.perf_counter() - t0 - t_sel
     assumed = []
     if settings.assumptions:
-        from cases.double_beam.update_assumptions import assumption_sensitivity
+        from cases.fe_loop.assumptions import assumption_sensitivity
 
         assumed = assumption_sensitivity(data, mask, noise, P, best, settings.force_scale,
-                                         Headline, executor, extension=ext)
+                                         assumptions, executor, extension=ext)
     sens = {}
     for name, pr in profiles.items():
         if pr.status != "determined":

@@ -1,7 +1,7 @@
-"""The diagnosis at the FE level: base and extended FE double beams refitted to the
+"""The diagnosis at the FE level: base and extended FE models of a case refitted to the
 measured levels, judged by the one judge, their errors on levels they never saw.
 
-:func:`fe_diagnosis` runs :func:`cases.double_beam.fe_select.fe_select` on the fit levels
+:func:`fe_diagnosis` runs :func:`cases.fe_loop.select.fe_select` on the fit levels
 (default: all but the top three): the base FE model and each testable cause's FE
 realization, judged by :func:`inverse.judge.select` (fit test, so the answer can be
 ``unexplained``; cost per cause; held-out gain > 1), then reports the chosen model:
@@ -23,8 +23,8 @@ import math
 
 import numpy as np
 
-from cases.double_beam.fe_levels import level_entries
-from cases.double_beam.fe_select import chosen_model, fe_select
+from cases.fe_loop.levels import level_entries
+from cases.fe_loop.select import chosen_model, fe_select
 from inverse.fe_selection import held_out_errors, prediction_sd
 from inverse.profile import bounded_interval, linear_grid, run_profiles
 
@@ -136,19 +136,17 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
     force_scale : float, N per excitation unit (every omega^2, zeta is invariant to it).
     causes : iterable of cause ids (default: every FE extension).
     progress : callable(str) or None, told what is being fitted.
-    levels : callable(data, force_scale=) -> FE-levels model (default the double beam's
-        :class:`DoubleBeamLevels`; a case file's :class:`cases.casefile.levels.CaseLevels`).
+    levels : callable(data, force_scale=) -> FE-levels model (the case's ``fe_levels``
+        capability, a :class:`cases.fe_loop.levels.FELevels`).
 
     Returns
     -------
     dict with ``fe_levels``, ``fe`` (cause, also, fit test, gains, errors, parameters).
     """
-    from cases.double_beam.fe_levels import DoubleBeamLevels
-
     mask = default_fit_mask(data.level) if mask is None else np.asarray(mask, dtype=bool)
     if mask.sum() < 5:
         raise ValueError(f"the FE diagnosis needs at least 5 fit levels, got {int(mask.sum())}")
-    fe = (levels or DoubleBeamLevels.from_data)(data, force_scale=force_scale)
+    fe = levels(data, force_scale=force_scale)
     s = fe_select(data, mask, fe, causes, progress)
     return report(data, mask, s)
 

@@ -1,6 +1,6 @@
-"""The report of ``iwanfe update --case double-beam``: JSON, text, markdown, figures.
+"""The report of ``iwanfe update --case NAME|FILE``: JSON, text, markdown, figures.
 
-:func:`summary` turns :func:`cases.double_beam.update_study.run_update`'s result into
+:func:`summary` turns :func:`cases.fe_loop.update.run_update`'s result into
 one JSON-ready dict; :func:`format_text` and :func:`markdown` word it;
 :func:`write_update` writes ``updated_model.json`` (the model: every parameter with
 its kind and interval, the joint it makes), ``update.json`` (everything),
@@ -14,8 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.double_beam.fe_levels import level_entries
-from cases.double_beam.update_study import BASE_PARAMETERS
+from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
 from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
 from inverse.profile import bounded_interval
@@ -98,6 +97,7 @@ def summary(r: dict) -> dict:
     j = pred.joint
     derived = {"R_tilde": j["R"], "phi_max_m": j["phi_max"], "F_S_N": j["F_S"],
                "beta": j["beta"], "K_T_N_per_m": j["K_T"], "grip_m": j["grip"],
+               "structure": j["structure"],
                "kappa1_B_level1": math.exp(best.values["ln_dc1"]),
                "kappa2_over_kappa1": kappa_ratio(best.values["chi"], "exact"),
                "force_scale_N_per_unit": r["settings"].force_scale}
@@ -138,7 +138,7 @@ def summary(r: dict) -> dict:
                     "shift_top_zeta_rel": (a["headline"]["zeta"][-1] / base_head["zeta"][-1] - 1)
                     if base_head["zeta"] else None}
                    for a in r.get("assumptions", [])]
-    return {"case": r.get("case", "double-beam"), "source": str(data.source),
+    return {"case": r["case"], "source": str(data.source),
             "mode": r["settings"].mode_label,
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
@@ -153,13 +153,6 @@ def summary(r: dict) -> dict:
             "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
             "confidence": r["settings"].confidence, "executor": r["executor"],
             "timing_s": r["timing_s"]}
-
-
-def _grip(d: dict) -> str:
-    """How the structure was calibrated (the double beam's grip, or the case file)."""
-    if d["grip_m"] is None or math.isnan(d["grip_m"]):
-        return "structure as the case file gives or calibrates it"
-    return f"grip {1e3 * d['grip_m']:.3f} mm (calibrated to 252.0 Hz for this K_T)"
 
 
 def format_text(s: dict) -> str:
@@ -184,7 +177,7 @@ def format_text(s: dict) -> str:
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
                  f"F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} "
-                 f"N/m, {_grip(d)}; force scale "
+                 f"N/m, {d['structure']}; force scale "
                  f"{d['force_scale_N_per_unit']:g} N/V assumed (omega2, zeta invariant to it)")
     lines.append("level held  f meas [Hz]  f model [Hz]  err [Hz]   zeta meas   zeta model  "
                  "err [%]  slip/phi_max")
@@ -265,7 +258,7 @@ widened by the misfit (chi2/dof) when the model misfits.
 
 The joint they make: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m,
 F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} N/m;
-{_grip(d)}, force scale {d['force_scale_N_per_unit']:g} N/V (assumed; omega^2 and zeta are exactly invariant
+{d['structure']}, force scale {d['force_scale_N_per_unit']:g} N/V (assumed; omega^2 and zeta are exactly invariant
 to it, R~ scales as its -(chi+1) power, phi_max and F_S as its first power).
 
 ## Levels (* = held out)

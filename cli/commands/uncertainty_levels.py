@@ -1,0 +1,86 @@
+"""``iwanfe uncertainty --case FILE``: the Monte Carlo of a case's FE-levels model
+(:mod:`cases.fe_loop.uncertainty`: exact describing function at phase resonance per
+sample), for a case without its own ``uncertainty`` study; options, text and files."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from cli import validate
+from cli.executor_options import executor_from_args
+from runs.jsonio import print_json, to_jsonable
+
+
+def _f(x, spec):
+    return "nan" if x is None or not math.isfinite(x) else format(x, spec)
+
+
+def text(r: dict) -> str:
+    """The readable report of :func:`cases.fe_loop.uncertainty.run_fe_uncertainty`."""
+    e, c = r["estimate"], r["confidence"]
+    lo, hi = (100 * (1 - c) / 2, 100 * (1 + c) / 2)
+    ch = r["chi"] or {"median": math.nan, "lo": math.nan, "hi": math.nan}
+    lines = [f"iwanfe uncertainty {r['source']}  case {r['case']}  mode {r['mode']}  exact "
+             f"estimate of levels {e['fit_levels']}",
+             f"  chi = {e['chi']:.4f} (fitted; t-interval {e['chi_interval'][0]:.3f} .. "
+             f"{e['chi_interval'][1]:.3f}), |kappa1|B = {e['kappa1_B']:.4g} 1/s^2, "
+             f"{e['dof']} dof",
+             f"  {r['n_samples']} samples, seed {r['seed']}, {r['distribution']['kind']} "
+             f"truncated to -1 < chi < 0 ({100 * r['distribution']['admissible_fraction']:.1f}"
+             f" % of the mass): chi median {ch['median']:.4f}, {lo:g}..{hi:g} % "
+             f"{ch['lo']:.4f} .. {ch['hi']:.4f}; {r['n_failed']} failed",
+             f"  per sample: {r['route']}", ""]
+    head = f" level     measured      nominal    MC median  {'MC %g..%g %%' % (lo, hi):^26s}  in"
+    for name, key, scale, spec in (("natural frequency (Hz)", "frequency_hz", 1.0, "10.4f"),
+                                   ("damping ratio (%)", "zeta", 100.0, "10.5f")):
+        lines += [f"{name}; * = held out of the fit", head]
+        for row in r["levels"]:
+            mc = row[f"mc_{key}"]
+            s = lambda v: _f(None if v is None else scale * v, spec)  # noqa: E731
+            lines.append(f" {row['level']:>4}{'*' if row['held_out'] else ' '} "
+                         f"{s(row[f'measured_{key}'])}  {s(row[f'nominal_{key}'])}  "
+                         f"{s(mc['median'])}  {s(mc['lo'])} .. {s(mc['hi'])}  "
+                         + {True: "yes", False: "no", None: "matched"}[
+                             row[f"measured_{key}_inside"]])
+        lines.append("")
+    for f in r["failures"][:5]:
+        lines.append(f"failed sample {f['index']} (chi = {f['chi']:.4f}): {f['status']}")
+    lines.append(f"samples in {r['store']}; total {r['timing_s']['total']:.1f} s "
+                 f"({r['executor']})")
+    return "\n".join(lines)
+
+
+def run_levels(args, case) -> int:
+    """The command on a case's ``fe_uncertainty`` capability (one line if it has none)."""
+    uncertainty = case.require("fe_uncertainty")
+    for name in ("band", "df", "sliders_per_octave"):
+        if getattr(args, name) is not None:
+            raise ValueError(f"--{name.replace('_', '-')}: only for a case with its own "
+                             f"stepped-sine study; case {case.name!r} is simulated at phase "
+                             "resonance")
+    if not 0 < args.confidence < 1:
+        raise ValueError(f"--confidence {args.confidence:g}: must lie in (0, 1)")
+    force_scale = 1.0 if args.force_scale is None else validate.positive(
+        args.force_scale, "--force-scale")
+    data = None if args.file is None else str(validate.input_file(args.file))
+    out = validate.output_dir(args.out, "--out")
+    progress = not args.no_progress
+    if progress:
+        print(f"iwanfe uncertainty: {args.samples} samples + nominal, store under {out}",
+              file=sys.stderr)
+    r = uncertainty(data_path=data, mode_label=args.mode, fit_levels=args.fit_levels,
+                    force_scale=force_scale, n_samples=args.samples, seed=args.seed,
+                    confidence=args.confidence, distribution=args.distribution, out=out,
+                    executor=executor_from_args(args), progress=progress)
+    Path(out).mkdir(parents=True, exist_ok=True)
+    js = Path(out) / "uncertainty.json"
+    js.write_text(json.dumps(to_jsonable(r), indent=1))
+    r["files"] = [str(js)]
+    if args.json:
+        print_json(r)
+    else:
+        print(text(r))
+        print(f"files: {js}")
+    return 0

@@ -1,0 +1,164 @@
+"""The case-independent FE loop (cases/fe_loop/) on a case file written from the spec
+(docs/case-files/bolted-lap-cantilever.toml): ``uncertainty``, ``update --assumptions``
+and ``diagnose --backbone`` on a table the project simulates from a seeded random chi
+that the commands never see (the file's own nonlinear model, cases.casefile.nonlinear:
+Ritz basis and the file's damping, at phase resonance; Gaussian noise from the same
+seed). And no module of cases/fe_loop/ imports a case."""
+from __future__ import annotations
+
+import ast
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cli.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
+LAP = ROOT / "docs" / "case-files" / "bolted-lap-cantilever.toml"
+SEED = 2026
+SIGMA_OMEGA2, SIGMA_ZETA = 2e-7, 2e-4      # relative noise of the planted table
+
+
+def test_fe_loop_imports_no_case():
+    """Generic means: nothing in cases/fe_loop/ imports another part of ``cases``."""
+    bad = []
+    for path in sorted((ROOT / "cases" / "fe_loop").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            bad += [f"{path.name}: {n}" for n in names
+                    if n.startswith("cases.") and not n.startswith("cases.fe_loop")]
+    assert not bad, bad
+
+
+@pytest.fixture(scope="module")
+def planted(tmp_path_factory):
+    """(csv path, planted chi, noise-free omega2, zeta): the file's joints with a chi drawn
+    from ``SEED``, simulated at the forces of the file's table."""
+    from cases.casefile.nonlinear import nonlinear_case
+    from cases.casefile.virtual_test import simulated_table
+    from cases.registry import resolve_case
+    from ident.measured import read_measured, write_measured
+
+    rng = np.random.default_rng(SEED)
+    chi = float(rng.uniform(-0.75, -0.3))
+    case = resolve_case(str(LAP))
+    data = read_measured(case.measured_data()).for_mode(2)
+    cf, _ = case.builders["calibrated_file"]()
+    cf = dataclasses.replace(cf, interfaces=tuple(dataclasses.replace(i, chi=chi)
+                                                  for i in cf.interfaces))
+    table = simulated_table(nonlinear_case(cf, case.fe_model()), data.excitation)
+    truth = table.omega2.copy(), table.zeta.copy()
+    table.omega2 = table.omega2 * (1 + SIGMA_OMEGA2 * rng.standard_normal(len(table)))
+    table.zeta = table.zeta * (1 + SIGMA_ZETA * rng.standard_normal(len(table)))
+    table.run_order = data.run_order
+    table.mode[:] = 2                                 # the file's [measured] mode label
+    path = tmp_path_factory.mktemp("planted") / "planted.csv"
+    write_measured(path, table)
+    return path, chi, truth
+
+
+def _json(capsys, *argv):
+    code = main([*map(str, argv), "--json"])
+    out = capsys.readouterr().out
+    assert code == 0
+    return json.loads(out)
+
+
+def test_uncertainty_on_the_case_file(planted, capsys, tmp_path):
+    """The planted chi inside the estimate's 90 % t-interval; the noise-free truth at
+    the held-out levels inside the Monte Carlo's 5-95 % band; level 1 matched by every
+    sample; a rerun loads every sample (resumable) and gives the same numbers, and so
+    does a pool of two processes (each sample from a cold start)."""
+    path, chi, (om2, zeta) = planted
+    argv = ("uncertainty", path, "--case", LAP, "--samples", 60, "--out", tmp_path,
+            "--no-progress")
+    r = _json(capsys, *argv)
+    lo, hi = r["estimate"]["chi_interval"]
+    assert lo < chi < hi and hi - lo < 0.3
+    assert r["n_failed"] == 0 and r["computed"] == 61
+    f_true = np.sqrt(om2) / (2 * math.pi)
+    for i, row in enumerate(r["levels"]):
+        assert row["held_out"] == (i >= 7)
+        if row["held_out"]:
+            assert row["mc_frequency_hz"]["lo"] < f_true[i] < row["mc_frequency_hz"]["hi"]
+            assert row["mc_zeta"]["lo"] < zeta[i] < row["mc_zeta"]["hi"]
+    first = r["levels"][0]   # matched to first order (eq. 2 of inverse.estimate at the
+    # level-1 slips of the linear inverse, not of the nonlinear solution)
+    assert first["nominal_frequency_hz"] == pytest.approx(first["measured_frequency_hz"],
+                                                          rel=1e-6)
+    assert first["nominal_zeta"] == pytest.approx(first["measured_zeta"], rel=2e-4)
+    again = _json(capsys, *argv)
+    assert again["computed"] == 0 and again["levels"] == r["levels"]
+    pool = _json(capsys, *argv[:-3], "--out", tmp_path / "pool", "--no-progress",
+                 "--executor", "processes", "--workers", "2")
+    assert pool["computed"] == 61 and pool["levels"] == r["levels"]   # bit for bit
+
+
+def test_update_assumptions_on_the_case_file(planted, capsys):
+    """``update --case FILE --data T --assumptions``: chi within 0.05 of the planted one
+    (its profile or linearized interval holds it), and each assumed property refitted:
+    E, rho of the one material (-/+ 3 %, -/+ 2 %) and the exciter mass (x 0.5, x 2)."""
+    path, chi, _ = planted
+    s = _json(capsys, "update", "--case", LAP, "--data", path, "--assumptions")
+    c = s["parameters"]["chi"]
+    assert abs(c["value"] - chi) < 0.05 and c["interval"][0] < chi < c["interval"][1]
+    names = [a["assumption"] for a in s["assumptions"]]
+    assert [n.split()[0] for n in names] == ["material.0.E"] * 2 + ["material.0.rho"] * 2 \
+        + ["mass.0.mass"] * 2
+    for a in s["assumptions"]:
+        assert math.isfinite(a["delta_chi2"]) and len(a["held_out_frequency_hz"]) == 3
+
+
+def test_assumed_properties_move_the_stuck_frequency_as_physics_says():
+    """The variants' stuck frequency against closed-form bounds: E x 1.03 scales the
+    strips' stiffness only (the joints' kt stays), so omega^2 rises by a factor in (1,
+    1.03]; rho x 1.02 scales the strips' mass only (the exciter mass stays): omega^2
+    falls by a factor in [1/1.02, 1); a heavier exciter lowers it."""
+    from cases.casefile.fe_loop import assumption_variants
+    from cases.registry import resolve_case
+    from ident.measured import read_measured
+
+    case = resolve_case(str(LAP))
+    data = read_measured(case.measured_data()).for_mode(2)
+    w2 = {name: levels(data).linear(1e7).omega_k ** 2
+          for name, (_, levels) in assumption_variants(case.file).items()}
+    w2_0 = case.builders["fe_levels"](data).linear(1e7).omega_k ** 2
+    r = {n.split(" (")[0]: w / w2_0 for n, w in w2.items()}
+    assert 1.0 < r["material.0.E 7.21e+10"] <= 1.03 * (1 + 1e-12)
+    assert 1.0 / 1.02 * (1 - 1e-12) <= r["material.0.rho 2754"] < 1.0
+    assert r["mass.0.mass 0.03"] < 1.0 < r["mass.0.mass 0.0075"]
+
+
+def test_diagnose_backbone_on_the_case_file(planted, capsys):
+    """``diagnose T --case FILE --backbone``: the joint estimated from levels 1-7 (chi
+    within 0.06 of the planted one) read off the EPMC backbone: level 1 matched, the
+    held-out levels' omega^2 loss from level 1 within 5 % of the noise-free truth's, and
+    their zeta within 0.5 %."""
+    path, chi, (om2, zeta) = planted
+    bb = _json(capsys, "diagnose", path, "--case", LAP, "--backbone")["backbone"]
+    assert abs(bb["chi"] - chi) < 0.06
+    lv = bb["levels"]
+    assert [r["held_out"] for r in lv] == [False] * 7 + [True] * 3
+    assert lv[0]["omega2"] == pytest.approx(lv[0]["measured_omega2"], rel=1e-6)
+    assert lv[0]["zeta"] == pytest.approx(lv[0]["measured_zeta"], rel=2e-4)
+    loss = lv[0]["omega2"] - np.array([r["omega2"] for r in lv])
+    true_loss = om2[0] - om2
+    assert np.all(np.abs(loss[7:] / true_loss[7:] - 1) < 0.05)
+    assert np.all(np.abs(np.array([r["zeta"] for r in lv[7:]]) / zeta[7:] - 1) < 5e-3)
+
+
+@pytest.mark.parametrize("argv, words", [
+    (("uncertainty", "--case", "lumped", "--samples", "2"), "no Monte Carlo"),
+    (("diagnose", str(ROOT / "cases" / "data" / "double_beam_measured.csv"), "--case",
+      "lumped", "--backbone"), "no FE-levels model"),
+    (("uncertainty", "--case", str(LAP), "--df", "0.5"), "--df: only for a case with"),
+])
+def test_a_case_without_the_capability_says_so_in_one_line(capsys, argv, words):
+    code = main(list(argv))
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and words in err
