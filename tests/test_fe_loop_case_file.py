@@ -162,3 +162,16 @@ def test_a_case_without_the_capability_says_so_in_one_line(capsys, argv, words):
     code = main(list(argv))
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and words in err
+
+
+def test_estimate_with_the_case_file_as_fe_model(planted, capsys):
+    """``estimate --case FILE``: B~ and R~ from the file's FE model. The FE mode is the
+    measured one (its stiff-joint frequency within 0.5 % of level 1), the planted chi lies
+    in the interval, and B~ and R~ are positive and finite."""
+    path, chi, (omega2, _) = planted
+    out = _json(capsys, "estimate", path, "--case", LAP)
+    assert out["case"]["fe_mode"] == 2
+    assert abs(out["case"]["fe_frequency_hz"] / (np.sqrt(omega2[0]) / (2 * np.pi)) - 1) < 5e-3
+    lo, hi = out["chi_interval"]
+    assert lo <= chi <= hi
+    assert math.isfinite(out["R"]) and out["R"] > 0 and out["B"] > 0

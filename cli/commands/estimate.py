@@ -14,7 +14,7 @@ import argparse
 import math
 
 from cli import validate
-from cases.registry import CASES, build_case
+from cases.registry import resolve_case
 from cli.series_options import add_series_arguments, series_from_args
 from inverse.estimate import (
     DEFAULT_CONFIDENCE,
@@ -47,8 +47,9 @@ def register(subparsers) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_series_arguments(parser)
-    parser.add_argument("--case", choices=CASES, default=None,
-                        help="FE model for B~ and R~ (without it B and R are null)")
+    parser.add_argument("--case", metavar="NAME|FILE", default=None,
+                        help="FE model for B~ and R~: a shipped case or a case file "
+                             "(without it B and R are null)")
     parser.add_argument("--fit-levels", default=None, metavar="LEVELS",
                         help="levels used in the fit, e.g. 1-7 or 1,3-7 (default: all)")
     parser.add_argument("--method", choices=METHODS, default="paper", help="see above")
@@ -78,7 +79,7 @@ def run(args) -> int:
     if args.plot:
         validate.output_file(args.plot, "--plot", (".png",))   # cli.validate: one rule
     data = series_from_args(args)
-    model = None if args.case is None else build_case(args.case)
+    model = None if args.case is None else resolve_case(args.case).fe_model()
     est = estimate(data, fit_levels=args.fit_levels, method=args.method, mode=args.mode,
                    model=model, case_name=args.case or "model", force_scale=args.force_scale,
                    fe_mode=args.fe_mode, confidence=args.confidence)
@@ -123,7 +124,6 @@ def _backbone(args, data, est):
     if args.case is None:
         raise ValueError("--backbone needs --case (the FE model the joint is put into)")
     from cases.fe_loop.backbone import predict_from_backbone
-    from cases.registry import resolve_case
 
     levels = resolve_case(args.case).require("fe_levels")
     return predict_from_backbone(data, est, levels, args.force_scale, case_name=args.case)
