@@ -175,3 +175,43 @@ def test_estimate_with_the_case_file_as_fe_model(planted, capsys):
     lo, hi = out["chi_interval"]
     assert lo <= chi <= hi
     assert math.isfinite(out["R"]) and out["R"] > 0 and out["B"] > 0
+
+
+def test_measured_frf_files_named_by_a_pattern_are_identified(planted, tmp_path, capsys,
+                                                              monkeypatch):
+    """``[measured] file = "frf/level_*.csv"``: the FRF files of a series (one per level,
+    synthesized here as the planted table's single modes: receptance
+    ``1 / (omega2 - w^2 + 2 i zeta sqrt(omega2) w)``) are identified by LSCF into the
+    table the FE loop reads: every level's frequency within 1e-6 and damping within 1 %
+    of the file's; ``update --case FILE`` on it recovers the planted chi within 0.05;
+    the table is cached."""
+    from ident.frf_files import FRFSet, write_frf
+    from ident.measured import read_measured
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    table = read_measured(planted[0])
+    (tmp_path / "frf").mkdir()
+    for k in range(len(table)):
+        w0, z = np.sqrt(table.omega2[k]), table.zeta[k]
+        f = np.linspace(0.97, 1.03, 301) * w0 / (2 * np.pi)
+        w = 2 * np.pi * f
+        H = 1e-3 / (w0 ** 2 - w ** 2 + 2j * z * w0 * w)
+        write_frf(tmp_path / "frf" / f"level_{k + 1:02d}.csv",
+                  FRFSet(f, H[:, None], ["1"], quantity="receptance",
+                         excitation=float(table.excitation[k]), reference="1",
+                         control="force", run_order=int(table.run_order[k])))
+    text = LAP.read_text()
+    start = text.index("[measured]")
+    line = next(x for x in text[start:].splitlines() if x.startswith("file"))
+    case_file = tmp_path / "lap.toml"
+    case_file.write_text(text.replace(line, 'file = "frf/level_*.csv"'))
+    from cases.registry import resolve_case
+
+    path = resolve_case(str(case_file)).measured_data()
+    got = read_measured(path)
+    assert len(got) == len(table)
+    assert np.allclose(np.sqrt(got.omega2 / table.omega2), 1, atol=1e-6)
+    assert np.allclose(got.zeta / table.zeta, 1, atol=1e-2)
+    assert resolve_case(str(case_file)).measured_data() == path         # cached
+    c = _json(capsys, "update", "--case", case_file)["parameters"]["chi"]
+    assert abs(c["value"] - planted[1]) < 0.05

@@ -33,7 +33,7 @@ def case_from_file(path) -> Case:
         return case_summary(f, build_model(f), report)
 
     builders = {"fe_model": fe_model, "summary": summary, "calibrated_file": file_at}
-    if cf.measured is not None and cf.measured.file is not None:
+    if cf.measured is not None and cf.measured.files:
         builders["measured_data"] = lambda: cf.measured.file
     joints = any(i.tangential == "joint" for i in cf.interfaces)
     if joints and cf.drive is not None and not missing_joint_parameters(cf):

@@ -34,7 +34,7 @@ def qualifies(cf) -> bool:
     """The file has what the FE loop needs (module docstring)."""
     joints = [i for i in cf.interfaces if i.tangential == "joint"]
     return bool(joints) and all(i.law == "iwan4" and i.kt for i in joints) \
-        and cf.drive is not None and cf.measured is not None and cf.measured.file is not None
+        and cf.drive is not None and cf.measured is not None and bool(cf.measured.files)
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ used by the nonlinear model; default 0: the joints' own dissipation only), and a
 from __future__ import annotations
 
 import dataclasses
+import glob
 import re
 import tomllib
 from pathlib import Path
@@ -286,18 +287,24 @@ class _Reader:
         t = self.table("measured")
         if t is None:
             return None
-        file = t.text("file", required=False)
-        if file is not None:
-            file = (self.path.parent / file).resolve()
-            if not file.exists():
-                t.fail("file", f"no such file: {file}")
+        raw = t.raw("file", False)
+        names = [raw] if isinstance(raw, str) else raw if raw is not None else []
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            t.fail("file", f"must be a path, a glob pattern or a list of paths, got {raw!r}")
+        files = []
+        for name in names:     # relative to this file; a pattern such as level_*.csv
+            found = sorted(self.path.parent.glob(name)) if glob.has_magic(name) else \
+                [self.path.parent / name]
+            if not found or not found[0].exists():
+                t.fail("file", f"no such file: {(self.path.parent / name).resolve()}")
+            files += [f.resolve() for f in found]
         mode = t.integer("mode", required=False, lo=1)
         f = t.number("frequency_hz", required=False, lo=0, lo_open=True)
         if mode is None and f is None:
             t.fail("mode", "give mode (bending-mode order) or frequency_hz")
         self.given(t, "mode", "frequency_hz")
         self.close(t)
-        return Measured(file, mode, f)
+        return Measured(tuple(files), mode, f)
 
     def calibrate(self, cf: CaseFile) -> Calibrate | None:
         t = self.table("calibrate")

@@ -76,9 +76,22 @@ class PointMass:
 
 @dataclass(frozen=True)
 class Measured:
-    file: Path | None
+    """``[measured]``: ``files`` (a measured-data table, the FRF files of a series or a
+    free-decay record; () when only the linear frequency is given), ``mode``,
+    ``frequency_hz``. ``file``: the measured-data table (FRF files and records are
+    identified first, :func:`cases.casefile.measured.measured_table`)."""
+
+    files: tuple
     mode: int | None
     frequency_hz: float | None
+
+    @property
+    def file(self) -> Path | None:
+        if not self.files:
+            return None
+        from cases.casefile.measured import measured_table
+
+        return measured_table(self.files)
 
 
 @dataclass(frozen=True)
