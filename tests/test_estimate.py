@@ -13,7 +13,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from cli import main as cli
 from ident.errors import InputError
-from cases.registry import build_case
+from cases.registry import build_case, resolve_case
 from inverse.estimate import estimate, parse_levels
 from inverse.fe_reference import joint_slip_at_resonance
 from inverse.iwan_modal import kappa_ratio, zeta_with_joint
@@ -324,16 +324,19 @@ def test_r_scales_with_force_scale_double_beam():
 
 
 def test_cli_case_resolves_through_the_registry(capsys):
-    """``--case NAME`` gives the estimate of the registry's model, labelled NAME; no
-    model leaves B and R null."""
+    """``--case NAME`` gives the estimate of the registry's model (the case file's), labelled
+    NAME, equal to the double beam's Python model's to 1e-6; no model leaves B and R
+    null."""
     code, out, err = run_cli(["estimate", str(DATA_FILE), "--fit-levels", "1-7",
                               "--case", "double-beam", "--json"], capsys)
     assert code == 0, err
     res = json.loads(out)
     data = read_measured(DATA_FILE)
-    lib = estimate(data, "1-7", "paper", model=build_case("double-beam"))
+    lib = estimate(data, "1-7", "paper", model=resolve_case("double-beam").fe_model())
     assert res["case"]["name"] == "double-beam" and lib.case.name == "model"
     assert res["R"] == pytest.approx(lib.R, rel=1e-12)
+    python_model = estimate(data, "1-7", "paper", model=build_case("double-beam"))
+    assert res["R"] == pytest.approx(python_model.R, rel=1e-6)     # case file = Python model
     assert res["case"]["fe_mode"] == lib.case.fe_mode
     bare = estimate(data, "1-7", "paper")
     assert bare.B is None and bare.R is None and bare.case is None
