@@ -128,6 +128,32 @@ def make_uff(path, name: str | None = None) -> str:
             + ", ".join(f"{v:.5f}" for v in zeta))
 
 
+def make_series(folder, name: str | None = None) -> str:
+    """The response-controlled FRF series of the identify and estimate examples: 8 levels
+    of a linear single-DOF mode each (41 lines of 0.05 Hz), held response 1e-6 x 2^k m,
+    the frequency rising 0.35 % and the damping growing 0.5 -> 2 % (planted: no Iwan
+    joint does both), 0.5 % noise on FRF and force (seeded); returns the truth as a line."""
+    sys.path.insert(0, str(ROOT))
+    from ident.frf_files import FRFSet, write_frf
+
+    rng = np.random.default_rng(3)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    fn = 80.0 * (1 + 0.0035 * np.linspace(0, 1, 8) ** 2)
+    zeta, held = np.geomspace(0.005, 0.02, 8), 1e-6 * 2.0 ** np.arange(8)
+    for k in range(8):
+        f = fn[k] + 0.05 * (np.arange(41) - 20)
+        w, wn = 2 * np.pi * f, 2 * np.pi * fn[k]
+        H = 1.0 / (2.5e5 / wn ** 2 * (wn ** 2 - w ** 2 + 2j * zeta[k] * wn * w))
+        force = held[k] / np.abs(H) * (1 + 0.005 * rng.standard_normal(f.size))
+        H = H * (1 + 0.005 * (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)))
+        write_frf(folder / f"level_{k + 1:02d}.csv",
+                  FRFSet(f, H[:, None], ["1"], "receptance", float(held[k]), "1",
+                         control="response", run_order=k + 1, force=force))
+    return (f"{name or folder}: 8 FRF files, response control; truth: "
+            f"{fn[0]:.4f} -> {fn[-1]:.4f} Hz, zeta {zeta[0]:.4f} -> {zeta[-1]:.4f}")
+
+
 def gl_available() -> bool:
     sys.path.insert(0, str(ROOT))
     from viz.offscreen import probe_offscreen
@@ -157,6 +183,9 @@ class Session:
         if words[:2] == ["python", "docs/examples.py"] and "--make-uff" in words:
             name = words[words.index("--make-uff") + 1]
             return [make_uff(self.cwd / name, name)]
+        if words[:2] == ["python", "docs/examples.py"] and "--make-series" in words:
+            name = words[words.index("--make-series") + 1]
+            return [make_series(self.cwd / name, name)]
         proc = subprocess.run(["bash", "-c", command], cwd=self.cwd, env=self.env,
                               capture_output=True, text=True, timeout=1800)
         if proc.returncode != 0:
@@ -255,11 +284,16 @@ def main(argv=None) -> int:
     ap.add_argument("--fast", action="store_true", help="skip the examples marked slow")
     ap.add_argument("--only", metavar="TEXT", help="only the examples whose commands hold TEXT")
     ap.add_argument("--make-uff", metavar="FILE", help="write the identify example's UFF file")
+    ap.add_argument("--make-series", metavar="DIR",
+                    help="write the FRF series of the identify and estimate examples")
     ap.add_argument("--page", action="append", metavar="FILE",
                     help="only these pages (default: README.md and every docs/*.md with examples)")
     args = ap.parse_args(argv)
     if args.make_uff:
         print(make_uff(args.make_uff))
+        return 0
+    if args.make_series:
+        print(make_series(args.make_series))
         return 0
     machine = machine_line()       # the load before the examples add their own
     paths = [Path(p).resolve() for p in args.page] if args.page else pages()
