@@ -86,7 +86,8 @@ class JointBank(JointLaw):
         """
         params = list(params)
         pm, chi = params[0].phi_max, params[0].chi
-        if any(not np.isclose(p.phi_max, pm, rtol=1e-12) or p.chi != chi for p in params):
+        if any(not np.isclose(p.phi_max, pm, rtol=1e-12, atol=0.0) or p.chi != chi
+               for p in params):
             raise ValueError("JointBank.log_spaced: all joints need the same phi_max and chi")
         return cls.from_discretizations(
             discretize_log(p, a_low, sliders_per_octave) for p in params)

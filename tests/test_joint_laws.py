@@ -180,3 +180,16 @@ def test_response_control_holds_the_amplitude_with_bouc_wen_joints():
     for sol in sols:
         ref = solve_hb_exact(model, law, np.array([sol.force + 0j]), sol.omega)
         assert abs(ref.q[0, 0]) == pytest.approx(A, rel=1e-9)
+
+
+def test_log_spaced_bank_refuses_joints_whose_slip_limits_differ_by_a_percent():
+    """``phi_max`` is micrometres: an absolute tolerance would let 1 % differences through."""
+    from joints.bank import JointBank
+    from joints.iwan import IwanParameters
+
+    p = IwanParameters(chi=-0.5, K_T=1e6, F_S=1.0, beta=0.1)
+    q = IwanParameters(chi=-0.5, K_T=1e6, F_S=1.01, beta=0.1)
+    assert abs(q.phi_max / p.phi_max - 1) > 5e-3 and p.phi_max < 1e-5
+    with pytest.raises(ValueError, match="same phi_max"):
+        JointBank.log_spaced([p, q], 1e-3 * p.phi_max)
+    assert JointBank.log_spaced([p, p], 1e-3 * p.phi_max).n_joints == 2
