@@ -17,9 +17,9 @@ instead of the double beam's Python model, so the one judge
   ``phi_max``, Segalman 2005 eq. 12): the file's ``chi``, ``fs``, ``beta`` are the nominal
   model; ``update`` fits ``chi`` and the joint strength in the variable the data
   determine.
-* Air drag (``quadratic-damping``): ``lambda3 = sum_strips b int |phi_w|^3 dx`` (the
-  strip widths folded in, so ``width = 1``); stacked strips over a lap are counted
-  twice (an upper bound of the exposed area there).
+* Air drag (``quadratic-damping``): ``lambda3 = int b |phi_w|^3 dx`` over the
+  projected area (the strip widths folded in, so ``width = 1``); where strips are
+  stacked over a lap, the one with the largest ``b |phi_w|^3`` (one exposed area).
 
 SI units.
 """
@@ -42,14 +42,20 @@ def total_kt(cf) -> float:
 
 
 def _lambda3(model, phi) -> float:
-    """``sum_strips b int |w|^3 dx`` of a free-DOF shape (trapezoidal rule, m^2 x
-    shape^3)."""
-    total = 0.0
-    for mesh, disp in zip(model.strip_meshes, model.strip_displacements(phi)):
-        x, w = np.asarray(mesh.x, float), np.abs(disp["w"]) ** 3
-        width = float(np.mean(mesh.width))
-        total += width * float(np.sum(0.5 * (w[1:] + w[:-1]) * np.diff(x)))
-    return total
+    """``int b |w|^3 dx`` over the assembly's projected area of a free-DOF shape (m^2 x
+    shape^3): on each interval between the strips' nodes the strip covering it with the
+    largest ``b |w|^3`` (stacked strips over a lap expose one area), trapezoidal rule."""
+    meshes, disps = model.strip_meshes, model.strip_displacements(phi)
+    grid = np.unique(np.concatenate([np.asarray(m.x, float) for m in meshes]))
+    dx = np.diff(grid)
+    best = np.zeros(dx.size)
+    for mesh, disp in zip(meshes, disps):
+        x = np.asarray(mesh.x, float)
+        w3 = float(np.mean(mesh.width)) * np.abs(disp["w"]) ** 3
+        inside = (grid[:-1] >= x[0]) & (grid[1:] <= x[-1])
+        seg = 0.5 * (np.interp(grid[:-1], x, w3) + np.interp(grid[1:], x, w3)) * dx
+        best = np.maximum(best, np.where(inside, seg, 0.0))
+    return float(best.sum())
 
 
 class CaseLevels(FELevels):
