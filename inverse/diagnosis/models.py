@@ -29,6 +29,20 @@ frequency drop and the damping growth. ``K1 >= 0`` is the hysteretic modal stiff
 the top level (rad^2/s^2), ``c`` the viscous modal damping (rad/s); the measured
 ``omega2_v`` stands in the factors of (3), as in the paper.
 
+What identification returns is not the backbone's ``W - K2 s**p`` but the squared
+modulus of the pole of the equivalent linear mode ``lambda^2 + c lambda + W_v + i k_q
+= 0`` (``W_v`` the in-phase and ``k_q`` the quadrature stiffness of the level, here
+``K1 s_v**p``): to second order in the damping
+
+    |lambda|^2 = W_v + k_q zeta_v                                                  (4)
+
+(zeta_v the level's whole damping ratio; exact for a viscous mode, ``k_q = 0``). So a
+joint's hysteretic damping *raises* the identified omega2 by ``k_q zeta_v`` (1e-3 of
+omega2 at 2 % damping), which a model of ``W_v`` alone would read as hardening. The
+models apply (4) to the joint's quadrature columns with the measured ``zeta_v``
+(checked against the LSCF of :func:`ident.identify.identify` on the FRF of a known
+hysteretic SDOF, ``tests/test_diagnosis_models.py``).
+
 Extensions: one per cause of the catalogue, each defined in its own file of
 :mod:`inverse.diagnosis.causes` (its nonlinear parameters with bounds and grid, its
 linear columns, its amplitude transform). ``s`` is the effective amplitude: ``s_v`` of
@@ -162,6 +176,9 @@ def design(model: Model, obs: Observations, theta):
     else:
         sp = np.exp(p * log_s)
         o, z = [-kappa_ratio(p - 1.0, "exact") * sp], [0.5 * sp / w2]
+    # the identified omega2 is |pole|^2: the joint's quadrature stiffness k_q = 2 w2 z
+    # adds k_q zeta to it (eq. 4)
+    o = [oi + 2.0 * w2 * zi * obs.zeta[None, :] for oi, zi in zip(o, z)]
     om, ze = om + o, ze + z
     for c in model.causes:
         if c != joint:
