@@ -154,7 +154,6 @@ def prediction_intervals(fit: Fit, obs: Observations, dof: float, level: float =
     return out
 
 
-
 def _quantile(dof: float, level: float) -> float:
     return float(stats.norm.ppf(0.5 + level / 2) if math.isinf(dof)
                  else stats.t.ppf(0.5 + level / 2, dof))

@@ -47,7 +47,7 @@ joint's hysteretic damping *raises* the identified omega2 by ``k_q zeta_v`` (1e-
 omega2 at 2 % damping), which a model of ``W_v`` alone would read as hardening. The
 models apply (4) to the joint's quadrature columns with the measured ``zeta_v``
 (checked against the LSCF of :func:`ident.identify.identify` on the FRF of a known
-hysteretic SDOF, ``tests/test_diagnosis_models.py``).
+hysteretic SDOF, ``tests/test_diagnosis_identified_omega2.py``).
 
 Extensions: one per cause of the catalogue, each defined in its own file of
 :mod:`inverse.diagnosis.causes` (its nonlinear parameters with bounds and grid, its
