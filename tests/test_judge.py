@@ -30,15 +30,17 @@ def test_smooth_scatter_is_blind_to_power_laws_and_finds_the_noise():
         assert smooth_scatter(x, 1 - 0.01 * s**p)[0] < 1e-3 * 0.01
     rng = np.random.default_rng(3)
     est = [smooth_scatter(x, 3 + x + 0.01 * rng.standard_normal(9))
-           for _ in range(3000)]
-    assert {e[1] for e in est} == {4}
-    assert np.mean([e[0] ** 2 for e in est]) == pytest.approx(1e-4, rel=0.05)   # unbiased
-    # with a run order, a quadratic drift in time is not scatter (2 dof fewer)
+           for _ in range(2000)]
+    # the curve is chosen by leave-one-out among families of 2-5 parameters (the
+    # choice lowers the estimate a little: 0.91 of the variance here)
+    assert {e[1] for e in est} <= {4, 5, 6, 7}
+    assert np.mean([e[0] ** 2 for e in est]) == pytest.approx(1e-4, rel=0.12)
+    # a drift with run order is not scatter: taken out with the curve (3 + 2 dof)
     t = np.array([3, 7, 1, 9, 5, 2, 8, 4, 6, 10, 11])
     x11 = np.log(np.geomspace(0.01, 1.0, 11))
     sd, dof = smooth_scatter(x11, 1 - 0.01 * np.exp(x11) + 1e-3 * t + 1e-4 * t**2, t)
-    assert dof == 4 and sd < 1e-12
-    # too few levels for the curve: local quadratic contrasts, one dof per window
+    assert dof == 6 and sd < 1e-12
+    # too few levels for most curves: a parabola in the log amplitude is one of them
     assert smooth_scatter(x[:6], 3 + 2 * x[:6] - 0.7 * x[:6] ** 2) == (
         pytest.approx(0.0, abs=1e-12), 3)
 

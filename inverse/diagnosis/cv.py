@@ -22,6 +22,12 @@ of :mod:`inverse.judge`. A level is left out with all its repeats.
   free parameters only (a parameter on its bound, a non-negative linear parameter at
   0, is held there, not treated as free); ``q`` the normal quantile with known noise,
   Student's t with the noise's degrees of freedom when the repeatability is estimated.
+* Model-averaged (:func:`model_averaged`): the named model is one of several the data
+  allow, and an interval conditional on it ignores that choice. The held-out
+  predictions of the eligible candidates (Akaike weights ``w_i`` renormalized over
+  them, those under :data:`W_MIN` dropped) are averaged, ``y = sum w_i y_i``, with
+  the unconditional variance ``sum w_i (sd_i^2 + (y_i - y)^2)`` (Burnham & Anderson
+  2002, sec. 4.3.2, eq. 4.9).
 
 A model with as many parameters as training data cannot predict; its error is None
 with the reason.
@@ -37,7 +43,11 @@ from inverse.diagnosis.fit import Fit, fit_folds, fit_model
 from inverse.diagnosis.models import Observations, design
 from inverse.judge import at_bound
 
-__all__ = ["leave_one_out", "held_out_top", "n_top", "prediction_intervals"]
+__all__ = ["W_MIN", "leave_one_out", "held_out_top", "n_top", "prediction_intervals",
+           "averaging_weights", "model_averaged"]
+
+#: Candidates of smaller renormalized Akaike weight are left out of the average.
+W_MIN = 0.01
 
 
 def _rows(obs: Observations, mask):
@@ -126,7 +136,7 @@ def prediction_intervals(fit: Fit, obs: Observations, dof: float, level: float =
         cols.append(((Aj[0] @ fit.linear - A @ fit.linear) / step)[:, None])
     J = np.hstack(cols)                                        # standardized model
     C = np.linalg.pinv(J[rows].T @ J[rows])
-    q = stats.norm.ppf(0.5 + level / 2) if math.isinf(dof) else stats.t.ppf(0.5 + level / 2, dof)
+    q = _quantile(dof, level)
     n = obs.n
     out = []
     for i in np.flatnonzero(~train):
@@ -143,3 +153,46 @@ def prediction_intervals(fit: Fit, obs: Observations, dof: float, level: float =
         out.append(item)
     return out
 
+
+def _quantile(dof: float, level: float) -> float:
+    return float(stats.norm.ppf(0.5 + level / 2) if math.isinf(dof)
+                 else stats.t.ppf(0.5 + level / 2, dof))
+
+
+def averaging_weights(selection) -> dict:
+    """``{candidate: weight}`` of the model average (module doc): the eligible
+    candidates of a :class:`inverse.judge.Selection`, renormalized, those under
+    :data:`W_MIN` dropped; the closest candidate alone when ``unexplained``."""
+    if not selection.eligible:
+        return {selection.best: 1.0}
+    w = {k: selection.weights[k] for k in selection.eligible}
+    tot = sum(w.values()) or 1.0
+    w = {k: v / tot for k, v in w.items() if v / tot >= W_MIN or k == selection.best}
+    tot = sum(w.values())
+    return {k: v / tot for k, v in w.items()}
+
+
+def model_averaged(per_model: dict, weights: dict, dof: float, level: float = 0.95):
+    """Model-averaged held-out predictions (module doc) from ``per_model``
+    ``{candidate: rows of prediction_intervals}`` (candidates whose held-out fit failed
+    left out) and ``weights`` ``{candidate: w}``; rows as :func:`prediction_intervals`."""
+    names = [k for k in weights if per_model.get(k)]
+    if not names:
+        return []
+    w = np.array([weights[k] for k in names])
+    w = w / w.sum()
+    q = _quantile(dof, level)
+    out = []
+    for rows in zip(*(per_model[k] for k in names)):
+        item = {"level": rows[0]["level"]}
+        for ch in ("omega2", "zeta"):
+            y = rows[0][ch]["measured"]
+            pred_i = np.array([r[ch]["predicted"] for r in rows])
+            sd_i = np.array([r[ch]["sd"] for r in rows])
+            pred = float(w @ pred_i)
+            sd = math.sqrt(float(w @ (sd_i**2 + (pred_i - pred) ** 2)))
+            item[ch] = {"measured": y, "predicted": pred,
+                        "interval": [pred - q * sd, pred + q * sd], "sd": sd,
+                        "inside": bool(abs(y - pred) <= q * sd)}
+        out.append(item)
+    return out

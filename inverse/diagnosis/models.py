@@ -15,7 +15,13 @@ damping (the paper's assumption), and the resonant amplitude of a mode whose dam
 grows. A shortfall beyond (1) (exciter force drop-out, a held level that is not the
 force reaching the structure) is the ``nonproportional-amplitude`` cause. With the
 ``response_amplitude`` column the response channel ``y_v = log R_v - log s_v`` is fitted
-too: a constant (the offset ``alpha``) in every model but that cause.
+too: a constant (the offset ``alpha``) in every model but that cause, plus the
+identification's distortion of a force-controlled level, ``kappa_id d ln zeta / d ln s``
+(slopes over the measured level means; ``kappa_id`` fitted, about 0.17 in size,
+:mod:`inverse.diagnosis.noise`): the equivalent linear fit of a stepped sine at
+constant force averages the damping over the half-power band, so the resonant amplitude
+read from it departs from (1) in proportion to the damping's log-slope. Without it that
+departure, a property of identification, would be read as a force shortfall.
 
 Base model (paper Sec. 2.2 and 4, eq. 43 and 45 with its factor 2), micro-slip, one
 equivalent joint, ``p = chi + 1``:
@@ -28,6 +34,20 @@ with ``kappa_ratio = kappa2_exact / |kappa1| = B(chi+5/2, 1/2) (chi+2)/(chi+1)``
 frequency drop and the damping growth. ``K1 >= 0`` is the hysteretic modal stiffness at
 the top level (rad^2/s^2), ``c`` the viscous modal damping (rad/s); the measured
 ``omega2_v`` stands in the factors of (3), as in the paper.
+
+What identification returns is not the backbone's ``W - K2 s**p`` but the squared
+modulus of the pole of the equivalent linear mode ``lambda^2 + c lambda + W_v + i k_q
+= 0`` (``W_v`` the in-phase and ``k_q`` the quadrature stiffness of the level, here
+``K1 s_v**p``): to second order in the damping
+
+    |lambda|^2 = W_v + k_q zeta_v                                                  (4)
+
+(zeta_v the level's whole damping ratio; exact for a viscous mode, ``k_q = 0``). So a
+joint's hysteretic damping *raises* the identified omega2 by ``k_q zeta_v`` (1e-3 of
+omega2 at 2 % damping), which a model of ``W_v`` alone would read as hardening. The
+models apply (4) to the joint's quadrature columns with the measured ``zeta_v``
+(checked against the LSCF of :func:`ident.identify.identify` on the FRF of a known
+hysteretic SDOF, ``tests/test_diagnosis_identified_omega2.py``).
 
 Extensions: one per cause of the catalogue, each defined in its own file of
 :mod:`inverse.diagnosis.causes` (its nonlinear parameters with bounds and grid, its
@@ -44,6 +64,7 @@ from itertools import combinations
 
 import numpy as np
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
+from inverse.diagnosis.noise import log_slope
 from inverse.iwan_modal import kappa_ratio
 
 __all__ = ["CAUSES", "Model", "Observations", "MODELS", "design"]
@@ -82,7 +103,7 @@ class Model:
         joint = self._joint()
         names = ["W", "c"] + (list(CATALOGUE[joint].LINEAR) if joint else ["K1"])
         names += [n for c in self.causes if c != joint for n in CATALOGUE[c].LINEAR]
-        return names + (["alpha"] if response else [])
+        return names + (["alpha", "kappa_id"] if response else [])
 
     def nonneg(self, response: bool) -> list:
         keep = {"K1"}.union(*(CATALOGUE[c].NONNEG for c in self.causes))
@@ -162,6 +183,9 @@ def design(model: Model, obs: Observations, theta):
     else:
         sp = np.exp(p * log_s)
         o, z = [-kappa_ratio(p - 1.0, "exact") * sp], [0.5 * sp / w2]
+    # the identified omega2 is |pole|^2: the joint's quadrature stiffness k_q = 2 w2 z
+    # adds k_q zeta to it (eq. 4)
+    o = [oi + 2.0 * w2 * zi * obs.zeta[None, :] for oi, zi in zip(o, z)]
     om, ze = om + o, ze + z
     for c in model.causes:
         if c != joint:
@@ -173,10 +197,11 @@ def design(model: Model, obs: Observations, theta):
                np.broadcast_to(obs.zeta / obs.sigma["zeta"], (G, n))]
     if obs.log_r is not None:
         k = blocks[0].shape[-1]
-        blocks = [np.concatenate([b, np.zeros((G, n, 1))], -1) for b in blocks]
+        blocks = [np.concatenate([b, np.zeros((G, n, 2))], -1) for b in blocks]
         sr = obs.sigma["response"][None, :]
-        resp = np.zeros((G, n, k + 1))
+        resp = np.zeros((G, n, k + 2))
         resp[..., k] = 1.0 / sr
+        resp[..., k + 1] = log_slope(obs.levels, np.log(obs.s), np.log(obs.zeta))[None] / sr
         blocks.append(resp)
         shift = log_s - np.log(obs.s)[None, :]
         targets.append((obs.log_r[None, :] - shift) / sr)

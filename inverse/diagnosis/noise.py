@@ -26,14 +26,14 @@ import numpy as np
 
 from inverse.judge import NoiseModel, noise_model
 
-__all__ = ["RESPONSE_FLOOR", "distortion", "one_mode_noise", "test_chi2"]
+__all__ = ["RESPONSE_FLOOR", "distortion", "log_slope", "one_mode_noise", "test_chi2"]
 
 #: Floor of the log response amplitude's noise (module doc).
 RESPONSE_FLOOR = 1e-2
 
 
-def _per_level(levels, x, y):
-    """``d y / d x`` over the level means, returned per row."""
+def log_slope(levels, x, y):
+    """``d y / d x`` over the level means, returned per row (0 with one level)."""
     lab, inv = np.unique(levels, return_inverse=True)
     if lab.size < 2:
         return np.zeros(len(y))
@@ -46,7 +46,7 @@ def distortion(log_s, zeta, levels=None):
     """Model error of the log response amplitude of a force-controlled level (module
     doc): ``0.17 |d ln zeta / d ln s|`` per row (slopes over level means)."""
     levels = np.arange(len(zeta)) if levels is None else levels
-    return 0.17 * np.abs(_per_level(levels, np.asarray(log_s), np.log(zeta)))
+    return 0.17 * np.abs(log_slope(levels, np.asarray(log_s), np.log(zeta)))
 
 
 def one_mode_noise(obs, stds: dict, abscissa, run_order) -> NoiseModel:
@@ -70,6 +70,6 @@ def test_chi2(residual, sigma, fitted, log_s, rows, force_control: bool, levels=
     levels = np.arange(r.shape[1]) if levels is None else levels
     if force_control and len(np.unique(levels)) > 1:
         for i in (0, 1):
-            e = 0.17 * np.abs(_per_level(levels, np.asarray(log_s), fitted[i]))
+            e = 0.17 * np.abs(log_slope(levels, np.asarray(log_s), fitted[i]))
             r[i] = r[i] * sigma[i] / np.sqrt(sigma[i] ** 2 + e**2)
     return float(np.sum(r[rows] ** 2))

@@ -111,7 +111,7 @@ def _failures(fits, cv, held, profile_failures):
             + profile_failures, "failed_fits": fits_failed, "failed_folds": folds}
 
 
-def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise,
+def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
              unavailable, untestable, contradictions, refuted, separability, warnings,
              predictions, selection_id_only, why_id_only, profiles,
              profile_failures) -> dict:
@@ -174,9 +174,12 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise,
         "held_out_errors": {"base": held_base, "extended": held_ext,
                             "note": held["none"][1] or held[best][1]},
         "held_out_predictions": {"model": best, "levels": predictions,
-                                 "interval": "nominal 95 % prediction interval (fit "
-                                             "uncertainty of the free parameters plus "
-                                             "the noise model)"},
+                                 "averaged_over": averaged,
+                                 "interval": "nominal 95 % prediction interval, model-"
+                                             "averaged over the eligible candidates "
+                                             "(fit uncertainty of the free parameters, "
+                                             "the noise model and the spread of the "
+                                             "candidates' predictions)"},
         "error_measure": ERROR_MEASURE.format(top=n_top),
         "evidence": _evidence(fits, unavailable, sel),
         "criterion": {"t_cause": T_CAUSE, "w_ambiguous": W_AMBIGUOUS,

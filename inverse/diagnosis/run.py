@@ -36,7 +36,8 @@ from ident.measured import MeasuredData
 from ident.modal_data import mean_per_level
 from inverse.contradictions import NoiseLevels, iwan_contradictions
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
-from inverse.diagnosis.cv import held_out_top, leave_one_out, n_top, prediction_intervals
+from inverse.diagnosis.cv import (averaging_weights, held_out_top, leave_one_out,
+                                  model_averaged, n_top, prediction_intervals)
 from inverse.diagnosis.fit import fit_model, profile_interval
 from inverse.diagnosis.models import MODELS, Observations
 from inverse.diagnosis.noise import one_mode_noise, test_chi2
@@ -229,10 +230,12 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     if best != "none" and chi_at_bound(params[best], best) is not None:
         found.append(chi_at_bound(params[best], best))
     sel_id, why_id = _identification_only(models, obs, noise, cv, refuted)
-    held = {k: held_out_top(fits[k], obs) for k in {"none", best}}
-    top_fit = held[best][2]
-    predictions = ([] if top_fit is None or top_fit.failed else
-                   prediction_intervals(top_fit, obs, effective_dof(noise)))
+    averaged = averaging_weights(sel)
+    held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
+    dof = effective_dof(noise)
+    predictions = model_averaged(
+        {k: prediction_intervals(held[k][2], obs, dof) for k in averaged
+         if held[k][2] is not None and not held[k][2].failed}, averaged, dof)
     profiles, profile_failures = _profiles(fits[best], obs, effective_dof(noise))
     if sel.cause == "none" or sel.rivals or np.unique(obs.levels).size < 8:
         sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)
@@ -242,7 +245,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
                        f"{np.unique(obs.levels).size} levels"}
     report = assemble(
         obs=obs, d=d, raw=raw, fits=fits, params=params, selection=sel, cv=cv,
-        held=held, n_top=n_top(np.unique(obs.levels).size), noise=noise,
+        held=held, n_top=n_top(np.unique(obs.levels).size), noise=noise, averaged=averaged,
         unavailable=unavailable, untestable=untestable, contradictions=found,
         refuted=refuted, separability=sep, warnings=warnings, predictions=predictions,
         selection_id_only=sel_id, why_id_only=why_id, profiles=profiles,

@@ -11,11 +11,14 @@ e.g. the log response amplitude, the same way on an absolute scale):
   values ``y / mean_level(y) - 1`` (``nu = sum_g (n_g - 1)`` degrees of freedom).
   Otherwise, and added to repeats of fewer than :data:`MIN_REPEAT_DOF` degrees of
   freedom, the scatter of the level means (``ln y``) about a *model-free* smooth curve
-  of the amplitude (:func:`smooth_scatter`): a Muntz polynomial in the relative
-  amplitude, plus a quadratic trend in run order when the run order is not monotone in
-  amplitude (a drift with time is not repeatability), ``sigma^2 = RSS / (n - rank)``;
-  with too few levels for that, the difference-based estimator of Gasser, Sroka &
-  Jennen-Steinmetz (1986) with local quadratic contrasts. The curve is not the model being judged: a misfit of that model
+  of the amplitude (:func:`smooth_scatter`): of several curve families (lines and
+  parabolas in the log amplitude, one or two power laws of amplitude with exponents
+  from a grid, a Muntz polynomial) the one with the least leave-one-out error (PRESS,
+  Allen 1974), ``sigma^2 = RSS / (n - k)`` with a grid exponent counted as a parameter;
+  when the run order is not monotone in amplitude, a step between two runs or a drift
+  with time is taken out where it lowers the leave-one-out error by
+  :data:`~inverse.judge.noise.RUN_ORDER_GAIN` (a change with time is not repeatability).
+  The curve is not the model being judged: a misfit of that model
   cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
   is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.
 * **total** ``= sqrt(identification^2 + repeatability^2)``, floored at

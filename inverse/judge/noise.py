@@ -2,13 +2,14 @@
 module doc of :mod:`inverse.judge`, "Noise model")."""
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 __all__ = ["MIN_REPEAT_DOF", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
-           "pooled_repeats"]
+           "muntz_scatter", "pooled_repeats"]
 
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
 MIN_REPEAT_DOF = 6
@@ -67,6 +68,98 @@ class NoiseModel:
         return out
 
 
+#: Exponents of the power laws of amplitude the model-free curves may take (a fixed
+#: grid; each exponent a curve uses counts as one fitted parameter).
+EXPONENTS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.75, 0.9, 1.0, 1.15, 1.3, 1.5, 1.75, 2.0, 2.5, 3.0,
+             4.5)
+#: Time constants (runs) of the warm-up drifts ``exp(-run / tau)`` a curve may add.
+WARM_UP_RUNS = (0.7, 1.5, 3.0)
+#: A run-order term is taken out when it lowers the leave-one-out error by this factor.
+RUN_ORDER_GAIN = 0.3
+#: Curves in amplitude that the run-order terms are tried with (the best by PRESS).
+_N_TRIED = 5
+
+
+def _curves(x):
+    """Model-free curve families over the log amplitude ``x`` (n,): (parameters,
+    columns). Lines and parabolas in ``x``; ``1, s^p``; ``1, x, s^p``; ``1, s^p, s^q``
+    (``s = exp(x - max x)``, ``p, q`` from :data:`EXPONENTS`: power laws of amplitude,
+    their sums, a bend at the top); the Muntz polynomial ``1, x, s^(1/3), s^(2/3), s``."""
+    n = x.size
+    s, one, xc = np.exp(x - x.max()), np.ones(n), x - x.mean()
+    sp = {p: s**p for p in EXPONENTS}
+    yield 2, [one, xc]
+    yield 3, [one, xc, xc**2]
+    for p in EXPONENTS:
+        yield 3, [one, sp[p]]
+        yield 4, [one, xc, sp[p]]
+    for p, q in itertools.combinations(EXPONENTS, 2):
+        yield 5, [one, sp[p], sp[q]]
+    yield 5, [one, xc, s ** (1 / 3), s ** (2 / 3), s]
+
+
+def _run_order_terms(t):
+    """Run-order terms a curve may add over the run order ``t`` (n,): (parameters,
+    columns, words). A step between two successive runs (a bolt loosening; its place
+    counts as a parameter); a linear and a quadratic drift with time; a warm-up
+    ``exp(-run / tau)`` (tau from :data:`WARM_UP_RUNS`, counted as a parameter)."""
+    tt = (t - t.mean()) / (np.ptp(t) or 1.0)
+    for cut in np.unique(t)[1:]:
+        yield 2, [(t >= cut).astype(float)], "a step"
+    yield 1, [tt], "a drift"
+    yield 2, [tt, tt**2], "a drift"
+    for tau in WARM_UP_RUNS:
+        yield 2, [np.exp(-(t - t.min()) / tau)], "a drift"
+
+
+def _press(cols, y):
+    """(leave-one-out error, RSS) of ``y`` about its least-squares fit on ``cols``
+    (None when the columns are rank-deficient)."""
+    q, r = np.linalg.qr(np.column_stack(cols))
+    d = np.abs(np.diag(r))
+    if d.min() < 1e-10 * d.max():
+        return None
+    e = y - q @ (q.T @ y)
+    h = np.sum(q**2, axis=1)
+    return float(np.sum((e / np.maximum(1.0 - h, 1e-9)) ** 2)), float(e @ e)
+
+
+def _scatter(x, y, t=None):
+    """:func:`smooth_scatter` and the run-order term it took out (words or None)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    n = x.size
+    if n < 3:
+        return 0.0, 0, None
+    t = None if t is None else np.asarray(t, float)
+    fits = []
+    for k, cols in _curves(x):
+        if n - k >= 1 and (f := _press(cols, y)) is not None:
+            fits.append((f[0], f[1], k, cols))
+    fits.sort(key=lambda f: f[0])
+    best = (*fits[0][:3], None)
+    for _, _, k, cols in (fits[:_N_TRIED] if t is not None else []):
+        for kt, extra, words in _run_order_terms(t):
+            if n - k - kt < 1 or (f := _press(cols + extra, y)) is None:
+                continue
+            if f[0] < min(RUN_ORDER_GAIN * fits[0][0], best[0]):
+                best = (f[0], f[1], k + kt, words)
+    _, rss, k, term = best
+    return math.sqrt(rss / (n - k)), n - k, term
+
+
+def smooth_scatter(x, y, t=None):
+    """Scatter of ``y`` (n,) about a model-free smooth curve over ``x`` (n,), the log
+    amplitude, distinct ``x`` (module doc): (sd, degrees of freedom).
+
+    The curve is the member of :func:`_curves` with the least leave-one-out error
+    (PRESS), ``sigma^2 = RSS / (n - k)`` with its ``k`` parameters (a grid exponent
+    counts as one). With a run order ``t`` (n,), a step between two runs or a drift
+    with time (:func:`_run_order_terms`) is taken out when it lowers the leave-one-out
+    error of one of the best curves: a change with run order is not repeatability.
+    (0, 0) for n < 3."""
+    return _scatter(x, y, t)[:2]
+
+
 def _contrast(x):
     """Unit contrast over the points ``x`` (k,) orthogonal to polynomials of degree
     ``k - 2`` (the last left singular vector of the Vandermonde matrix)."""
@@ -82,9 +175,9 @@ def _residual_scatter(B, y):
     return float(np.sqrt(np.sum((y - B @ coef) ** 2) / dof)), dof
 
 
-def smooth_scatter(x, y, t=None):
-    """Scatter of ``y`` (n,) about a model-free smooth curve over ``x`` (n,), the log
-    amplitude, distinct ``x`` (module doc): (sd, degrees of freedom).
+def muntz_scatter(x, y, t=None):
+    """The earlier, more conservative curve (kept for the FE level, module doc): scatter
+    of ``y`` (n,) about one fixed curve over ``x`` (n,): (sd, degrees of freedom).
 
     The curve: a Muntz polynomial in the relative amplitude ``s = exp(x - max x)``,
     ``1, ln s, s^(1/3), s^(2/3), s`` (any power law of amplitude to a few 1e-4 of its
@@ -145,7 +238,8 @@ def _plural(n, word):
 
 
 def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
-                floors: dict | None = None, model_error: dict | None = None) -> NoiseModel:
+                floors: dict | None = None, model_error: dict | None = None,
+                curve: str = "chosen") -> NoiseModel:
     """Identification uncertainty plus the test's repeatability (module doc).
 
     Parameters
@@ -156,8 +250,8 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         (absolute, e.g. a log response amplitude)
     stds : {channel: (n,) or None} the identification's standard uncertainties
     level_ids : (n,) level label of each row (rows sharing it are repeats)
-    run_order : (n,) chronological order; when it is not monotone in amplitude the
-        smooth-curve scatter is made blind to a quadratic drift with time
+    run_order : (n,) chronological order; when it is not monotone in amplitude a step
+        or a drift with it is not taken as repeatability (:func:`smooth_scatter`)
     floors : overrides of :data:`FLOORS`; model_error : {channel: (n,)} added in
         quadrature to an estimated (not identification) part.
     """
@@ -182,7 +276,11 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
         means = np.array([np.mean(y[level_ids == g]) for g in labels])
         xm = np.array([np.mean(x[level_ids == g]) for g in labels])
-        s_s, nu_s = smooth_scatter(xm, np.log(means) if rel else means, tm)
+        ym = np.log(means) if rel else means
+        s_s, nu_s, stepped = (_scatter(xm, ym, tm) if curve == "chosen"
+                              else (*muntz_scatter(xm, ym, tm), None))
+        curve = f"scatter about a smooth curve ({nu_s} dof)" + (
+            f" with {stepped} in run order taken out" if stepped else "")
         if nu_r >= MIN_REPEAT_DOF:
             s2, nu = s_r**2, nu_r
             words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof)", "repeats"
@@ -190,11 +288,11 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
             nu = nu_r + nu_s
             s2 = (nu_r * s_r**2 + nu_s * s_s**2) / nu
             words = (f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof) pooled with the "
-                     f"scatter about a smooth curve ({nu_s} dof)")
+                     f"{curve}")
             kd = "repeats+smooth"
         else:
             s2, nu = s_s**2, nu_s
-            words, kd = f"scatter about a smooth curve ({nu_s} dof)", "smooth"
+            words, kd = curve, "smooth"
         id_rel2 = float(np.mean((idn / scale) ** 2))
         r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
         r = r_rel * scale
