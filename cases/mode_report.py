@@ -49,14 +49,23 @@ def band_modes(model, band_hz, measured_hz=None, tolerance: float = MATCH_TOLERA
             for i in np.flatnonzero((f >= lo) & (f <= hi))]
 
 
-def mode_report(case, band=(0.0, 1000.0), element_size=None, uncalibrated=False) -> dict:
-    """Modes of ``case`` (:class:`cases.case.Case` with an FE model) in ``band`` plus the
+#: Default top of the band (Hz), or this many times the measured frequency if higher.
+DEFAULT_TOP_HZ, DEFAULT_TOP_OVER_MEASURED = 1000.0, 1.8
+
+
+def mode_report(case, band=None, element_size=None, uncalibrated=False) -> dict:
+    """Modes of ``case`` (:class:`cases.case.Case` with an FE model) in ``band`` (Hz;
+    None: from 0 to :data:`DEFAULT_TOP_HZ` or :data:`DEFAULT_TOP_OVER_MEASURED` times the
+    measured frequency, whichever is higher, within what the mesh represents) plus the
     calibration statement."""
     case.require("fe_model")
-    lo, hi = (float(v) for v in band)
+    cf = case.file
+    measured = cf.measured.frequency_hz if cf.measured is not None else None
+    given = band is not None
+    lo, hi = (float(v) for v in band) if given else \
+        (0.0, max(DEFAULT_TOP_HZ, DEFAULT_TOP_OVER_MEASURED * (measured or 0.0)))
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
         raise ValueError(f"--band {lo:g} {hi:g}: needs finite 0 <= LO < HI (Hz)")
-    cf = case.file
     length = max(b.x[1] - b.x[0] for b in cf.beams)
     h = cf.element_size if element_size is None else float(element_size)
     if element_size is not None:
@@ -71,13 +80,14 @@ def mode_report(case, band=(0.0, 1000.0), element_size=None, uncalibrated=False)
     top = min(max_band_hz(cf.material(b.material).E, cf.material(b.material).rho,
                           min([b.thickness] + [s.thickness for s in b.sections]), h)
               for b in cf.beams)
+    if not given:
+        hi = min(hi, top)
     if hi > top:
         raise ValueError(f"--band {lo:g} {hi:g}: HI must be <= {top:.4g} Hz, the shortest "
                          f"bending wave this beam model and mesh represent")
     file_at = case.builders["calibrated_file"]
     calibration = file_at(element_size=element_size)[1]
     model = case.fe_model(element_size=element_size, calibrated=not uncalibrated)
-    measured = cf.measured.frequency_hz if cf.measured is not None else None
     return {"case": case.name, "band_hz": [lo, hi], "measured_frequency_hz": measured,
             "model": "uncalibrated" if uncalibrated and calibration else
                      ("calibrated" if calibration else "as given"),

@@ -25,8 +25,10 @@ def register(subparsers) -> None:
     p.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
                    help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml); "
                         f"default {DEFAULT_CASE}")
-    p.add_argument("--band", nargs=2, type=float, metavar=("LO", "HI"), default=(50.0, 450.0),
-                   help="frequency band in Hz (default 50 450)")
+    p.add_argument("--band", nargs=2, type=float, metavar=("LO", "HI"), default=None,
+                   help="frequency band in Hz (default: 0 to 1000 Hz, or to 1.8 times the "
+                        "case's measured frequency where that is higher, within what the "
+                        "mesh represents)")
     p.add_argument("--element-size", type=float, default=None, metavar="M",
                    help="element size in m (default: the case file's [mesh])")
     p.add_argument("--uncalibrated", action="store_true",
