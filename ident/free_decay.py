@@ -186,8 +186,14 @@ def isolate_mode(time_s, x, band_hz=None, reference=0) -> Isolated:
                          f"{EDGE_PERIODS} at each end need {2 * (EDGE_PERIODS + MIN_CYCLES)}")
     L = i0 + PAD_PERIODS * period
     fit = min(max(PREDICTOR_PERIODS * period, 4 * PREDICTOR_ORDER), t.size // 2)
-    head = continue_record(raw[:fit][::-1], L, growth=BACKWARD_GROWTH)[::-1]
-    tail = continue_record(raw[-fit:], L, growth=1.0)
+    head, head_ok = continue_record(raw[:fit][::-1], L, growth=BACKWARD_GROWTH)
+    tail, tail_ok = continue_record(raw[-fit:], L, growth=1.0)
+    head = head[::-1]
+    for ok, end in ((head_ok, "start"), (tail_ok, "end")):
+        if not ok:
+            notes.append(f"the record's {end} could not be continued by linear prediction "
+                         "(ill-conditioned: round-off or noise there); its mirror image was "
+                         f"used, and the rows near the {end} may carry end effects")
     extended = signal.sosfiltfilt(sos, np.concatenate([head, raw, tail]))
     z = signal.hilbert(extended)
     keep = slice(L + edge, L + t.size - edge)
@@ -196,8 +202,9 @@ def isolate_mode(time_s, x, band_hz=None, reference=0) -> Isolated:
                     trim_s=(edge / fs, edge / fs), sos=sos, shape=shape, notes=notes)
 
 
-def continue_record(y, n, order=None, growth=1.0):
-    """The ``n`` samples that continue ``y`` (1-D, in time order) by its least-squares
+def continue_record(y, n, order=None, growth=1.0) -> tuple[np.ndarray, bool]:
+    """(the ``n`` samples that continue ``y``, whether the predictor did it): ``y`` (1-D,
+    in time order) continued by its least-squares
     linear predictor of ``order`` (forward linear prediction: a sum of damped sinusoids,
     every mode and trend of the segment); fed a time-reversed segment it continues the
     record backwards. The predictor's roots are held within ``growth ** (1 / n)`` in
@@ -214,8 +221,8 @@ def continue_record(y, n, order=None, growth=1.0):
     zi = signal.lfiltic([1.0], a, y=y[::-1][:p])
     out = signal.lfilter([1.0], a, np.zeros(n), zi=zi)[0]
     if np.all(np.isfinite(out)) and np.abs(out).max() <= 2 * growth * np.abs(y).max():
-        return out
-    return np.r_[y[-2::-1], np.zeros(n)][:n]    # ill-conditioned (round-off): mirror image
+        return out, True
+    return np.r_[y[-2::-1], np.zeros(n)][:n], False     # ill-conditioned: mirror image
 
 
 def decay_onset(t, ln_a, period_s, drop=ONSET_DROP) -> float:
