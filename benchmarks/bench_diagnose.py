@@ -70,8 +70,12 @@ def _diagnose(data):
     except Exception as exc:                       # counted, printed, never a number
         return {"error": f"{type(exc).__name__}: {str(exc)[:120]}",
                 "seconds": time.perf_counter() - t0}
+    ev = {k: {"p": (v.get("fit_test") or {}).get("p_value"), "gain": v.get("gain"),
+              "weight": v.get("weight"), "why_not": v.get("why_not")}
+          for k, v in (r.get("evidence") or {}).items()}
     return {"cause": r["cause"], "also": list(r["also"]),
             "held_out_predictions": r.get("held_out_predictions"),
+            "evidence": ev, "noise": {k: v.get("source") for k, v in (r.get("noise") or {}).items()},
             "seconds": time.perf_counter() - t0}
 
 
