@@ -36,9 +36,10 @@ from ident.measured import MeasuredData
 from ident.modal_data import mean_per_level
 from inverse.contradictions import NoiseLevels, iwan_contradictions
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
-from inverse.diagnosis.cv import (averaging_weights, held_out_top, leave_one_out,
-                                  model_averaged, n_top, prediction_intervals)
+from inverse.diagnosis.cv import held_out_top, leave_one_out, n_top
 from inverse.diagnosis.fit import fit_model, profile_interval
+from inverse.diagnosis.intervals import (averaging_weights, model_averaged,
+                                         prediction_intervals)
 from inverse.diagnosis.models import MODELS, Observations
 from inverse.diagnosis.noise import one_mode_noise, test_chi2
 from inverse.diagnosis.params import physical_parameters
@@ -232,10 +233,9 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     sel_id, why_id = _identification_only(models, obs, noise, cv, refuted)
     averaged = averaging_weights(sel)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
-    dof = effective_dof(noise)
     predictions = model_averaged(
-        {k: prediction_intervals(held[k][2], obs, dof) for k in averaged
-         if held[k][2] is not None and not held[k][2].failed}, averaged, dof)
+        {k: prediction_intervals(held[k][2], obs, noise.dof) for k in averaged
+         if held[k][2] is not None and not held[k][2].failed}, averaged)
     profiles, profile_failures = _profiles(fits[best], obs, effective_dof(noise))
     if sel.cause == "none" or sel.rivals or np.unique(obs.levels).size < 8:
         sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)

@@ -1,0 +1,205 @@
+"""Held-out prediction intervals of the diagnosis: for each row of a level a fit did not
+see (the held-out top levels of :func:`inverse.diagnosis.cv.held_out_top`), the
+predicted omega2 and zeta with a nominal 95 % prediction interval, per candidate and
+model-averaged (docs/coverage.md: why each term is there, measured coverage).
+
+Per candidate (:func:`prediction_intervals`). ``J`` is the Jacobian of the standardized
+model (rows: every channel and level, divided by the noise sd; columns: the free
+parameters only: a parameter on its bound, a non-negative linear parameter at 0, is held
+there), ``T`` the training rows, ``C = (J_T^T J_T)^+`` and ``h_r = J_r^T C J_r`` the
+leverage of training row ``r``. All variances below are in units of the row's noise
+variance ``sigma^2``.
+
+* Misfit scale (:func:`misfit_scale`). A channel ``c`` whose training residuals ``e_r``
+  exceed the noise is not within its noise model, and that noise understates the scatter
+  about the model. With correct noise ``E e_r^2 = 1 - h_r`` (residual covariance
+  ``I - H``, Seber & Lee 2003, sec. 3.3), so
+
+      S_c^2 = sum_{r in T_c} e_r^2 / d_c,       d_c = sum_{r in T_c} (1 - h_r)      (1)
+
+  estimates the ratio of the channel's true to assumed variance with ``d_c`` degrees of
+  freedom. When ``S_c^2 > 1`` the channel's variance is scaled by it and its degrees of
+  freedom are ``d_c`` (the scale factor of the Particle Data Group's averages, Birge
+  1932: applied only when it exceeds 1); otherwise the noise model's ``f_c = 1`` with
+  its own degrees of freedom ``nu_c`` (inf: known).
+* Variance of the prediction of channel ``c`` at row ``i`` (gradient ``g = J_i``): the
+  new row's own noise plus the parameters' sandwich covariance ``C J^T F J C``
+  (``F`` the scales ``f``):
+
+      V = f_c + sum_k P_k',  P_k' = f_k sum_{r in T_k} (g^T C J_r)^2               (2)
+
+* Degrees of freedom: each part ``P_k = P_k' + [k = c] f_c`` is estimated with the
+  degrees of freedom of channel ``k``; Welch-Satterthwaite (Satterthwaite 1946):
+
+      nu = V^2 / sum_k (P_k^2 / nu_k)          (known channels add nothing)        (3)
+
+  The interval is ``y_hat +- t_nu(0.975) sigma sqrt(V)`` (normal when ``nu = inf``). A
+  prediction of one channel thus carries that channel's degrees of freedom, not the
+  count of all channels pooled (which made a frequency sd from 4 dof look like 16).
+
+Model-averaged (:func:`model_averaged`): the named model is one of several the data
+allow, and an interval conditional on it ignores that choice. The predictions of the
+eligible candidates (Akaike weights ``w_i`` renormalized, those under :data:`W_MIN`
+dropped; the closest candidate alone when ``unexplained``) are averaged,
+``y = sum w_i y_i``, with the unconditional variance ``sum w_i (v_i + (y_i - y)^2)``
+(Burnham & Anderson 2002, eq. 4.9 in the form of their eq. 6.12), each model's variance
+taken on the normal scale, ``v_i = (t_{nu_i} / z)^2 sd_i^2`` (their sec. 4.3.3: the
+adjustment of a t-based interval), and the interval ``y +- z sqrt(sum ...)``,
+``z = 1.96``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import stats
+
+from inverse.diagnosis.models import Observations, design
+from inverse.judge import at_bound
+
+__all__ = ["W_MIN", "misfit_scale", "prediction_variance", "prediction_intervals",
+           "averaging_weights", "model_averaged", "quantile"]
+
+#: Candidates of smaller renormalized Akaike weight are left out of the average.
+W_MIN = 0.01
+
+
+def quantile(dof: float, level: float = 0.95) -> float:
+    """Two-sided ``level`` quantile: normal for ``dof = inf``, else Student's t."""
+    return float(stats.norm.ppf(0.5 + level / 2) if math.isinf(dof)
+                 else stats.t.ppf(0.5 + level / 2, dof))
+
+
+def misfit_scale(J_train, e_train, channel, dof):
+    """Per-channel variance scales and degrees of freedom, eq. (1).
+
+    ``J_train`` (N, k) standardized Jacobian of the training rows, ``e_train`` (N,)
+    their standardized residuals, ``channel`` (N,) channel index of each row, ``dof``
+    (channels,) the noise model's degrees of freedom (inf: known). Returns (``f``,
+    ``nu``, ``C``), each (channels,) but ``C = (J^T J)^+``."""
+    C = np.linalg.pinv(J_train.T @ J_train)
+    lev = np.einsum("rk,kl,rl->r", J_train, C, J_train)
+    f, nu = np.ones(len(dof)), np.array(dof, float)
+    for c in range(len(dof)):
+        m = channel == c
+        d_c = float(np.sum(1.0 - lev[m]))
+        if d_c > 0.5 and np.sum(e_train[m] ** 2) > d_c:
+            f[c], nu[c] = float(np.sum(e_train[m] ** 2)) / d_c, d_c
+    return f, nu, C
+
+
+def prediction_variance(g, c: int, J_train, channel, C, f, nu):
+    """(``V``, ``nu``) of eqs. (2)-(3): the variance (noise units) and the degrees of
+    freedom of the prediction of channel ``c`` with standardized gradient ``g`` (k,)."""
+    a = (J_train @ (C @ g)) ** 2
+    P = f * np.bincount(channel, a, minlength=len(f))
+    P[c] += f[c]
+    known = np.isinf(nu)
+    den = float(np.sum(P[~known] ** 2 / nu[~known]))
+    V = float(P.sum())
+    return V, (V**2 / den if den > 0 else math.inf)
+
+
+def _rows(obs: Observations, mask):
+    return np.tile(mask, len(obs.channels))
+
+
+def _free(fit, obs: Observations, rtol: float = 1e-3):
+    """Masks of the free nonlinear and linear parameters (not on a bound)."""
+    nl = np.array([not at_bound(v, lo, hi, rtol)[0]
+                   for v, (_, lo, hi, _) in zip(fit.theta, fit.model.nonlinear)], bool)
+    nonneg = fit.model.nonneg(obs.log_r is not None)
+    lin = np.array([not (j in nonneg and x <= 0.0) for j, x in enumerate(fit.linear)], bool)
+    return nl, lin
+
+
+def _jacobian(fit, obs: Observations):
+    """Standardized model Jacobian (all rows, free parameters) by forward differences
+    in the nonlinear parameters (1e-5 of their range), exact in the linear ones."""
+    nl_free, lin_free = _free(fit, obs)
+    A = design(fit.model, obs, fit.theta[None])[0][0]
+    cols = [A[:, lin_free]]
+    for j in np.flatnonzero(nl_free):
+        _, lo, hi, _ = fit.model.nonlinear[j]
+        h = 1e-5 * (hi - lo)
+        step = -h if fit.theta[j] + h > hi else h
+        th = fit.theta.copy()
+        th[j] += step
+        Aj = design(fit.model, obs, th[None])[0][0]
+        cols.append(((Aj @ fit.linear - A @ fit.linear) / step)[:, None])
+    return np.hstack(cols)
+
+
+def prediction_intervals(fit, obs: Observations, dof: dict, level: float = 0.95):
+    """Predicted omega2 and zeta of the rows ``fit`` did not see, with their nominal
+    ``level`` prediction intervals (module doc). ``dof`` ``{channel: degrees of
+    freedom}`` of the noise (inf: known). Returns a list of dicts, one per held-out row:
+    ``{level, omega2: {measured, predicted, interval, sd, dof, misfit_scale, inside},
+    zeta: {...}}``."""
+    train = np.asarray(fit.train, bool)
+    rows = _rows(obs, train)
+    J = _jacobian(fit, obs)
+    n, nch = obs.n, len(obs.channels)
+    channel = np.repeat(np.arange(nch), n)[rows]
+    f, nu, C = misfit_scale(J[rows], fit.residual[rows], channel,
+                            [dof[ch] for ch in obs.channels])
+    out = []
+    for i in np.flatnonzero(~train):
+        item = {"level": int(obs.levels[i])}
+        for c, ch in enumerate(("omega2", "zeta")):
+            r = c * n + i
+            V, nu_i = prediction_variance(J[r], c, J[rows], channel, C, f, nu)
+            sd = obs.sigma[ch][i] * math.sqrt(V)
+            q = quantile(nu_i, level)
+            y = [obs.omega2, obs.zeta][c][i]
+            pred = y - fit.residual[r] * obs.sigma[ch][i]
+            item[ch] = {"measured": float(y), "predicted": float(pred),
+                        "interval": [float(pred - q * sd), float(pred + q * sd)],
+                        "sd": float(sd), "dof": None if math.isinf(nu_i) else float(nu_i),
+                        "misfit_scale": float(math.sqrt(f[c])),
+                        "inside": bool(abs(y - pred) <= q * sd)}
+        out.append(item)
+    return out
+
+
+def averaging_weights(selection) -> dict:
+    """``{candidate: weight}`` of the model average (module doc): the eligible
+    candidates of a :class:`inverse.judge.Selection`, renormalized, those under
+    :data:`W_MIN` dropped; the closest candidate alone when ``unexplained``."""
+    if not selection.eligible:
+        return {selection.best: 1.0}
+    w = {k: selection.weights[k] for k in selection.eligible}
+    tot = sum(w.values()) or 1.0
+    w = {k: v / tot for k, v in w.items() if v / tot >= W_MIN or k == selection.best}
+    tot = sum(w.values())
+    return {k: v / tot for k, v in w.items()}
+
+
+def model_averaged(per_model: dict, weights: dict, level: float = 0.95):
+    """Model-averaged held-out predictions (module doc) from ``per_model``
+    ``{candidate: rows of prediction_intervals}`` (candidates whose held-out fit failed
+    left out) and ``weights`` ``{candidate: w}``; rows as :func:`prediction_intervals`
+    (a row without ``dof`` is taken as known noise), ``sd`` the averaged sd on the
+    normal scale."""
+    names = [k for k in weights if per_model.get(k)]
+    if not names:
+        return []
+    w = np.array([weights[k] for k in names])
+    w = w / w.sum()
+    z = quantile(math.inf, level)
+    out = []
+    for rows in zip(*(per_model[k] for k in names)):
+        item = {"level": rows[0]["level"]}
+        for ch in ("omega2", "zeta"):
+            y = rows[0][ch]["measured"]
+            pred_i = np.array([r[ch]["predicted"] for r in rows])
+            adj = np.array([quantile(r[ch].get("dof") or math.inf, level) / z
+                            for r in rows])
+            v_i = (adj * np.array([r[ch]["sd"] for r in rows])) ** 2
+            pred = float(w @ pred_i)
+            sd = math.sqrt(float(w @ (v_i + (pred_i - pred) ** 2)))
+            item[ch] = {"measured": y, "predicted": pred,
+                        "interval": [pred - z * sd, pred + z * sd], "sd": sd,
+                        "inside": bool(abs(y - pred) <= z * sd)}
+        out.append(item)
+    return out
