@@ -51,12 +51,14 @@ are in units of the row's noise variance ``sigma^2``.
 Model-averaged (:func:`model_averaged`): the named model is one of several the data
 allow, and an interval conditional on it ignores that choice. The predictions of the
 eligible candidates (Akaike weights ``w_i`` renormalized, those under :data:`W_MIN`
-dropped; the closest candidate alone when ``unexplained``, whose misfit then widens its
-interval through (1)) are averaged, ``y = sum w_i y_i``, with the unconditional
-variance ``sum w_i (v_i + (y_i - y)^2)`` (Burnham & Anderson 2002, sec. 4.3.2, in its
-form without square roots), each model's variance on the normal scale,
+dropped) are averaged, ``y = sum w_i y_i``, with the unconditional variance
+``sum w_i (v_i + (y_i - y)^2)`` (Burnham & Anderson 2002, sec. 4.3.2, in its form
+without square roots), each model's variance on the normal scale,
 ``v_i = (t_{nu_i} / z)^2 sd_i^2`` (their adjustment of t-based intervals, sec. 4.3),
-and the interval ``y +- z sqrt(sum ...)``, ``z = 1.96``.
+and the interval ``y +- z sqrt(sum ...)``, ``z = 1.96``. When ``unexplained`` the
+closest candidate stands alone, and as no candidate is within the noise on all levels,
+(1) is taken on its fit to all levels where that is larger: a wider interval that
+carries the misfit the verdict found.
 """
 from __future__ import annotations
 
@@ -175,19 +177,28 @@ def grid_posterior(fit, obs: Observations, f, chunk: int = 4096):
     return res, w / w.sum()
 
 
-def prediction_intervals(fit, obs: Observations, dof: dict, level: float = 0.95):
+def prediction_intervals(fit, obs: Observations, dof: dict, level: float = 0.95,
+                         misfit_of=None):
     """Predicted omega2 and zeta of the rows ``fit`` did not see, with their nominal
     ``level`` prediction intervals (module doc). ``dof`` ``{channel: degrees of
-    freedom}`` of the noise (inf: known). Returns a list of dicts, one per held-out row:
-    ``{level, omega2: {measured, predicted, interval, sd, dof, misfit_scale, inside},
-    zeta: {...}}``; ``predicted`` the posterior mean of eq. (4)."""
+    freedom}`` of the noise (inf: known); ``misfit_of`` a fit of the same model to all
+    levels whose misfit scales (eq. 1) are used where larger (an ``unexplained``
+    verdict: the closest candidate misses the levels above the training ones too).
+    Returns a list of dicts, one per held-out row: ``{level, omega2: {measured,
+    predicted, interval, sd, dof, misfit_scale, inside}, zeta: {...}}``;
+    ``predicted`` the posterior mean of eq. (4)."""
     train = np.asarray(fit.train, bool)
     rows = _rows(obs, train)
     J, n_lin = _jacobian(fit, obs)
     n, nch = obs.n, len(obs.channels)
     channel = np.repeat(np.arange(nch), n)[rows]
-    f, nu = misfit_scale(J[rows], fit.residual[rows], channel,
-                         [dof[ch] for ch in obs.channels])
+    noise_dof = [dof[ch] for ch in obs.channels]
+    f, nu = misfit_scale(J[rows], fit.residual[rows], channel, noise_dof)
+    if misfit_of is not None:
+        every = _rows(obs, misfit_of.train)
+        fa, nua = misfit_scale(_jacobian(misfit_of, obs)[0][every], misfit_of.residual[every],
+                               np.repeat(np.arange(nch), n)[every], noise_dof)
+        f, nu = np.where(fa > f, fa, f), np.where(fa > f, nua, nu)
     counts = np.bincount(channel, minlength=nch).astype(float)
     J_lin = J[:, :n_lin]
     C_lin, C = _inverse_normal(J_lin[rows]), _inverse_normal(J[rows])

@@ -156,8 +156,9 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
                        separability["inseparable"], unfit)
     summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
     if on_bound:
-        summary += (f" On a bound in the {best} fit: {', '.join(on_bound)} (held there: "
-                    f"not treated as free in the prediction intervals).")
+        summary += (f" On a bound in the {best} fit: {', '.join(on_bound)} (not treated as "
+                    f"free: the prediction intervals integrate the nonlinear parameters "
+                    f"over their bounded range).")
     return {
         "cause": cause, "also": also, "mode": int(d.mode[0]),
         "control": "response" if obs.response_controlled else "force",
@@ -176,10 +177,14 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
         "held_out_predictions": {"model": best, "levels": predictions,
                                  "averaged_over": averaged,
                                  "interval": "nominal 95 % prediction interval, model-"
-                                             "averaged over the eligible candidates "
-                                             "(fit uncertainty of the free parameters, "
-                                             "the noise model and the spread of the "
-                                             "candidates' predictions)"},
+                                             "averaged over the eligible candidates: "
+                                             "the noise (scaled up where the training "
+                                             "fit misses it), the linear parameters' "
+                                             "uncertainty, the nonlinear parameters "
+                                             "integrated over their bounded grid, the "
+                                             "spread of the candidates' predictions; "
+                                             "Student t with each channel's dof "
+                                             "(docs/coverage.md)"},
         "error_measure": ERROR_MEASURE.format(top=n_top),
         "evidence": _evidence(fits, unavailable, sel),
         "criterion": {"t_cause": T_CAUSE, "w_ambiguous": W_AMBIGUOUS,

@@ -233,9 +233,10 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     sel_id, why_id = _identification_only(models, obs, noise, cv, refuted)
     averaged = averaging_weights(sel)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
-    predictions = model_averaged(
-        {k: prediction_intervals(held[k][2], obs, noise.dof) for k in averaged
-         if held[k][2] is not None and not held[k][2].failed}, averaged)
+    predictions = model_averaged(       # unexplained: widened by the closest's misfit
+        {k: prediction_intervals(held[k][2], obs, noise.dof,
+                                 misfit_of=fits[k] if sel.unexplained else None)
+         for k in averaged if held[k][2] is not None and not held[k][2].failed}, averaged)
     profiles, profile_failures = _profiles(fits[best], obs, effective_dof(noise))
     if sel.cause == "none" or sel.rivals or np.unique(obs.levels).size < 8:
         sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)
