@@ -28,7 +28,10 @@ Each check is judged against the noise of the data: the identification's standar
 uncertainties where the table has ``omega2_std``/``zeta_std``, else the level-to-level
 scatter (median absolute second difference; a smooth trend adds to it, so this errs
 toward fewer contradictions). A contradiction is stated only when it exceeds
-:data:`Z_STATE` noise standard deviations.
+:data:`Z_STATE` noise standard deviations, or, when the noise was estimated on ``nu``
+degrees of freedom (a repeatability from a few repeats or a smooth curve), the
+Student-t quantile of the same tail probability (:func:`threshold`; 3 sd with known
+noise is ``t_2 = 19``, ``t_5 = 6.9``, ``t_20 = 3.6`` sd).
 """
 from __future__ import annotations
 
@@ -36,13 +39,15 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import stats
 
 #: Least micro-slip ratio kappa2/|kappa1| (chi -> 0): 3 pi / 4.
 MIN_TIE = 3.0 * math.pi / 4.0
 #: Noise standard deviations a contradiction must exceed to be stated.
 Z_STATE = 3.0
 
-__all__ = ["Contradiction", "NoiseLevels", "noise_levels", "iwan_contradictions", "MIN_TIE"]
+__all__ = ["Contradiction", "NoiseLevels", "noise_levels", "threshold", "iwan_contradictions",
+           "MIN_TIE"]
 
 
 @dataclass
@@ -55,6 +60,16 @@ class NoiseLevels:
     omega2: np.ndarray
     zeta: np.ndarray
     source: str
+    dof_omega2: float = math.inf
+    dof_zeta: float = math.inf
+
+
+def threshold(dof: float) -> float:
+    """Standardized size a contradiction must exceed (module doc): :data:`Z_STATE` with
+    known noise, the Student-t quantile of the same one-sided tail with ``dof``."""
+    if math.isinf(dof):
+        return Z_STATE
+    return float(stats.t.isf(stats.norm.sf(Z_STATE), max(dof, 1.0)))
 
 
 @dataclass
@@ -103,7 +118,7 @@ def _frequency_rise(d, sig: NoiseLevels) -> Contradiction | None:
     s_w = np.hypot(sig.omega2[i], sig.omega2[j])
     s_z = np.hypot(sig.zeta[i], sig.zeta[j])
     z_rise = (w[j] - w[i]) / s_w
-    ok = ((z[j] - z[i]) / s_z > Z_STATE) & (z_rise > Z_STATE)
+    ok = ((z[j] - z[i]) / s_z > threshold(sig.dof_zeta)) & (z_rise > threshold(sig.dof_omega2))
     if not ok.any():
         return None
     # the whole series (lowest -> top level) when it shows the rise, else the strongest pair
@@ -135,7 +150,7 @@ def _tie(d, sig: NoiseLevels) -> Contradiction | None:
     s_c = 2.0 * math.hypot(w[b] * sig.zeta[b], w[a] * sig.zeta[a])
     least = MIN_TIE * growth_c
     margin = (least - loss) / math.hypot(s_loss, MIN_TIE * s_c)
-    if margin <= Z_STATE:
+    if margin <= threshold(min(sig.dof_omega2, sig.dof_zeta)):
         return None
     f_a = math.sqrt(w[a]) / (2 * math.pi)
     text = (f"from level {d.level[a]} to {d.level[b]} the damping ratio grows "

@@ -86,3 +86,36 @@ def test_chi_outside_the_iwan_range():
     chi, d = iwan_series(np.random.default_rng(3))
     assert [c.kind for c in iwan_contradictions(d, chi=0.69)] == ["chi-out-of-range"]
     assert "0.69" in iwan_contradictions(d, chi=0.69)[0].statement
+
+
+@pytest.mark.parametrize("dof", [1.0, 2.0, 5.0, 20.0])
+def test_threshold_with_an_estimated_noise_keeps_the_known_noise_tail(dof):
+    """A contradiction stated at 3 sd with known noise keeps its false-alarm tail when
+    the noise sd is estimated on ``dof`` degrees of freedom: Student's t quantile."""
+    from scipy import stats
+
+    from inverse.contradictions import Z_STATE, threshold
+    assert threshold(math.inf) == Z_STATE
+    assert stats.t.sf(threshold(dof), dof) == pytest.approx(stats.norm.sf(Z_STATE), rel=1e-9)
+    # Monte Carlo of the ratio (planted normal / sd estimated on dof): same tail
+    rng = np.random.default_rng(int(10 * dof))
+    z = rng.standard_normal(400_000) / np.sqrt(rng.chisquare(dof, 400_000) / dof)
+    rate = np.mean(z > threshold(dof))
+    assert abs(rate - stats.norm.sf(Z_STATE)) < 5 * math.sqrt(stats.norm.sf(Z_STATE) / 4e5)
+
+
+def test_a_rise_of_six_sd_is_stated_with_known_noise_not_with_a_two_dof_estimate():
+    from inverse.contradictions import NoiseLevels
+    n = 6
+    w = np.full(n, 1e6)
+    w[-1] += 6.0 * math.sqrt(2.0)           # +6 sd of the difference of two levels
+    z = np.linspace(0.01, 0.02, n)
+    d = MeasuredData(level=np.arange(1, n + 1), excitation=np.arange(1.0, n + 1), omega2=w,
+                     zeta=z, mode=None, run_order=None, control=np.full(n, "force"))
+    sd_w, sd_z = np.ones(n), np.full(n, 1e-5)
+    known = NoiseLevels(sd_w, sd_z, "identification")
+    two = NoiseLevels(sd_w, sd_z, "scatter about a smooth curve", 2.0, 2.0)
+    many = NoiseLevels(sd_w, sd_z, "repeats", 200.0, 200.0)
+    kinds = lambda s: [c.kind for c in iwan_contradictions(d, None, s)]  # noqa: E731
+    assert "frequency-rises" in kinds(known) and "frequency-rises" in kinds(many)
+    assert "frequency-rises" not in kinds(two)

@@ -132,3 +132,46 @@ def test_at_bound():
     assert at_bound(-0.005, -0.995, -0.005) == (True, "upper")
     assert at_bound(0.3, 0.0, 1.0) == (False, None)
     assert at_bound(0.0, 0.0, np.inf) == (True, "lower")
+
+
+def test_known_noise_equivalent_makes_the_drop_chi_square_under_the_null():
+    """Nested fits (line vs parabola) of level means whose noise is estimated from
+    repeats (4 dof): the raw drop of chi2 is q F(q, 4), too often large for a
+    chi-square; its known-noise equivalent is chi-square(q) (planted straight line)."""
+    from inverse.judge import known_noise_equivalent
+    rng = np.random.default_rng(77)
+    G, reps, sd = 4, 2, 0.2
+    x = np.linspace(0.0, 1.0, G)
+    raw, mapped = [], []
+    for _ in range(2000):
+        y = (1.0 + 0.5 * x)[:, None] + sd * rng.standard_normal((G, reps))
+        s2 = np.sum((y - y.mean(1, keepdims=True)) ** 2) / (G * (reps - 1))
+        m = y.mean(1)
+        rss = [np.sum((m - np.polyval(np.polyfit(x, m, k), x)) ** 2) for k in (1, 2)]
+        drop = reps * (rss[0] - rss[1]) / s2
+        raw.append(drop)
+        mapped.append(known_noise_equivalent(drop, 1, G * (reps - 1)))
+    q99 = stats.chi2.ppf(0.99, 1)
+    assert np.mean(np.array(raw) > q99) > 3 * 0.01            # F(1, 4): 5.6 % beyond
+    assert stats.kstest(mapped, stats.chi2(1).cdf).pvalue > 0.01
+    assert known_noise_equivalent(7.0, 2, math.inf) == 7.0
+    assert known_noise_equivalent(-1.0, 2, 3.0) == -1.0
+
+
+def test_an_estimated_noise_needs_a_larger_drop_but_keeps_the_causes_order():
+    """A drop of chi2 that names a cause with known noise is not enough with a noise of 3
+    degrees of freedom; a large one still is, and the causes keep their chi2 order."""
+    from dataclasses import replace
+    known = noise_model(np.arange(1.0, 11.0), {"omega2": np.full(10, 1e6)},
+                        {"omega2": np.full(10, 10.0)}, np.arange(10))
+    assert math.isinf(known.dof["omega2"])
+    three = replace(known, dof={"omega2": 3.0})
+    base = Candidate((), 3, 30.0, 20)
+    a = Candidate(("a",), 5, 12.0, 20, gain=1.5)          # drop 18 for 2 parameters
+    assert select([base, a], known).cause == "a"
+    assert select([base, a], three).cause == "none"      # P(F(2, 3) > 9) = 0.05
+    big = [Candidate((), 3, 900.0, 20), Candidate(("a",), 5, 15.0, 20, gain=2.0),
+           Candidate(("b",), 5, 40.0, 20, gain=2.0)]
+    s = select(big, three)
+    assert s.cause == "a" and not s.ambiguous
+    assert s.weights["a"] / s.weights["b"] == pytest.approx(math.exp(25.0 / 2), rel=1e-9)

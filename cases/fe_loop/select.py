@@ -11,8 +11,9 @@ fit levels within their noise).
 
 Noise (:func:`fe_noise`): :func:`inverse.judge.noise_model` of the whole series, the
 abscissa of the one-mode diagnosis (``excitation / (zeta omega^2)``, or the held
-response amplitude): the identification's stds plus the repeatability, so the FE level
-and the one-mode diagnosis judge the same table against the same noise.
+response amplitude): the identification's stds plus the repeatability (the same
+curve families), so the FE level and the one-mode diagnosis judge the same table
+against the same noise.
 
 Not tested (:func:`untestable`): ``thermal-drift`` when the run order is monotone in
 amplitude (a drift with time cannot be told from an amplitude effect);
@@ -99,7 +100,7 @@ def fe_noise(data):
         data.excitation / (data.zeta * data.omega2)
     jn = judge.noise_model(x, {"omega2": data.omega2, "zeta": data.zeta},
                            {"omega2": data.omega2_std, "zeta": data.zeta_std},
-                           data.level, data.run_order, curve="muntz")
+                           data.level, data.run_order)
     dof = [jn.dof[c] for c in ("omega2", "zeta")]
     words = "; ".join(f"{c}: {jn.source[c]}" for c in ("omega2", "zeta"))
     return jn, NoiseModel(jn.total["omega2"], jn.total["zeta"], words,

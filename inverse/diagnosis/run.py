@@ -13,7 +13,9 @@ Decision: the one rule of :func:`inverse.judge.select`. Every candidate gets
 ``IC = chi2 + 2k + T n_causes`` (``T`` = :data:`T_CAUSE` = 6: a cause is worth naming
 when it lowers the AIC by more than 6, evidence ratio ``e^3 = 20``; with correct noise
 and no effect a nested extension with ``q`` extra parameters passes with probability
-``P(chi2_q > 2q + 6)``, 0.5-0.7 % for q = 1-3) and its Akaike weight. Eligible are the
+``P(chi2_q > 2q + 6)``, 0.5-0.7 % for q = 1-3; with a noise estimated on few degrees
+of freedom the drop of chi2 enters at its known-noise equivalent, which keeps that
+rate) and its Akaike weight. Eligible are the
 candidates within the noise (fit test, p >= 1e-3) whose held-out (leave-one-level-out)
 gain exceeds 1; the named explanation is the eligible one of largest weight,
 ``ambiguous`` when another has a third of its weight (:data:`W_AMBIGUOUS`; an evidence
@@ -155,7 +157,8 @@ def _contradictions(d, obs, noise, base_zeta, base_params):
     first = np.r_[0, np.flatnonzero(np.diff(obs.levels)) + 1]
     cnt = np.diff(np.r_[first, obs.n])
     levels = NoiseLevels(noise.total["omega2"][first] / np.sqrt(cnt),
-                         noise.total["zeta"][first] / np.sqrt(cnt), noise.source["omega2"])
+                         noise.total["zeta"][first] / np.sqrt(cnt), noise.source["omega2"],
+                         noise.dof["omega2"], noise.dof["zeta"])
     zm = np.add.reduceat(base_zeta, first) / cnt
     return (iwan_contradictions(dm, None, levels)
             + own_contradictions(dm, base_params, zm, levels))

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from inverse.contradictions import Z_STATE, Contradiction
+from inverse.contradictions import Contradiction, threshold
 from inverse.diagnosis.causes import CATALOGUE
 
 __all__ = ["own_contradictions", "chi_at_bound", "describe"]
@@ -13,12 +13,13 @@ __all__ = ["own_contradictions", "chi_at_bound", "describe"]
 def own_contradictions(d, base_params: dict, base_zeta, noise) -> list:
     """The diagnosis's own statements: the base fit collapsing to no joint while the
     damping grows (``no-joint``), or putting chi on the edge of (-1, 0)
-    (``chi-at-bound``), each judged at :data:`Z_STATE` noise standard deviations."""
+    (``chi-at-bound``), each judged at :func:`inverse.contradictions.threshold` noise
+    standard deviations."""
     z = np.asarray(d.zeta, float)
     a, b = 0, z.size - 1
     s_g = math.hypot(noise.zeta[a], noise.zeta[b])
     growth = z[b] - z[a]
-    if growth / s_g <= Z_STATE:
+    if growth / s_g <= threshold(getattr(noise, "dof_zeta", math.inf)):
         return []
     fitted = float(base_zeta[b] - base_zeta[a])
     out = []

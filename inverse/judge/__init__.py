@@ -33,7 +33,13 @@ of freedom combined by moment matching (Satterthwaite 1946):
 
 Selection (:func:`select`): the IC of a candidate is ``chi2 + 2k + T n_causes``
 (``T`` = :data:`T_CAUSE`, prior odds ``e^-3`` per cause, :mod:`inverse.diagnose`);
-Akaike weights ``w_i ~ exp(-IC_i / 2)``. A candidate is *eligible* when its fit test
+Akaike weights ``w_i ~ exp(-IC_i / 2)``. The information criterion takes the noise as
+known; with a noise estimated on ``nu`` degrees of freedom a candidate's drop of chi2
+from the base model, ``q`` parameters more, is ``q F(q, nu)`` under no effect, far
+heavier-tailed than ``chi-square(q)`` at small ``nu`` (``P(F(2, 3) > 5) = 0.11``
+against ``P(chi2_2 > 10) = 0.007``). The drop enters the IC at its known-noise
+equivalent of equal tail probability (:func:`known_noise_equivalent`), so a cause is
+named at the same false-alarm rate whatever the noise's degrees of freedom. A candidate is *eligible* when its fit test
 gives ``p >= P_UNEXPLAINED``, it is not excluded (a refuted base model, an inactive
 extension) and, if it names a cause, its held-out gain exceeds 1 (a gain over failed
 folds is None: not eligible). The named explanation is the eligible candidate of
@@ -47,9 +53,10 @@ from inverse.judge.bounds import Bounded, at_bound
 from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
                                  pooled_repeats, smooth_scatter)
 from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
-                                     Selection, effective_dof, fit_test, select)
+                                     Selection, effective_dof, fit_test,
+                                     known_noise_equivalent, select)
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
            "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
-           "fit_test", "effective_dof", "Candidate", "Selection", "select", "Bounded",
-           "at_bound"]
+           "fit_test", "effective_dof", "known_noise_equivalent", "Candidate", "Selection",
+           "select", "Bounded", "at_bound"]

@@ -11,7 +11,7 @@ from scipy import stats
 from inverse.judge.noise import NoiseModel
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "FitTest", "fit_test", "effective_dof",
-           "Candidate", "Selection", "select"]
+           "known_noise_equivalent", "Candidate", "Selection", "select"]
 
 #: Tail probability below which a fit leaves the data outside their noise.
 P_UNEXPLAINED = 1e-3
@@ -127,13 +127,46 @@ def _why_not(c: Candidate, test: FitTest, p_min: float):
     return None
 
 
+def known_noise_equivalent(delta_chi2: float, q: int, nu: float) -> float:
+    """The chi-square drop with known noise that is as improbable as ``delta_chi2``
+    with a noise estimated on ``nu`` degrees of freedom (module doc of
+    :mod:`inverse.judge`, "Selection").
+
+    Under no effect, ``delta_chi2`` of ``q`` added parameters is ``q F(q, nu)`` with
+    an estimated noise and ``chi-square(q)`` with a known one; the drop is mapped
+    through equal tail probability, ``chi2_q.isf(F_{q,nu}.sf(delta_chi2 / q))``.
+    ``nu = inf`` or ``q <= 0`` or ``delta_chi2 <= 0``: unchanged."""
+    if math.isinf(nu) or q <= 0 or delta_chi2 <= 0:
+        return float(delta_chi2)
+    tail = float(stats.f.logsf(delta_chi2 / q, q, nu))
+    return float(stats.chi2.isf(math.exp(tail), q)) if tail > -700 else float(delta_chi2)
+
+
+def _information(cands: dict, nu: float, t_cause: float) -> dict:
+    """``IC = chi2 + 2k + T n_causes`` of every candidate that can be fitted (module
+    doc). With an estimated noise the causes' ICs are raised together, by as much as
+    the best of them rises when its drop from the base model is taken at its
+    known-noise equivalent: the base model against the causes is judged at the
+    known-noise false-alarm rate, the causes among themselves by their chi2."""
+    ic = {k: c.chi2 + 2 * c.n_params + t_cause * len(c.causes) for k, c in cands.items()
+          if c.n_data > c.n_params}
+    base = cands.get("none")
+    causes = [k for k in ic if k != "none"]
+    if "none" not in ic or not causes or math.isinf(nu):
+        return ic
+    drop = {k: base.chi2 - cands[k].chi2 for k in causes}
+    mapped = [ic[k] + drop[k] - known_noise_equivalent(
+        drop[k], cands[k].n_params - base.n_params, nu) for k in causes]
+    shift = max(0.0, min(mapped) - min(ic[k] for k in causes))
+    return {k: v + (shift if k != "none" else 0.0) for k, v in ic.items()}
+
+
 def select(candidates, noise: NoiseModel, t_cause: float = T_CAUSE,
            p_min: float = P_UNEXPLAINED, w_ambiguous: float = W_AMBIGUOUS) -> Selection:
     """The one model-selection rule (module doc) over ``candidates``
     (:class:`Candidate`; the base model has ``causes = ()``)."""
     cands = {c.name: c for c in candidates}
-    ic = {k: c.chi2 + 2 * c.n_params + t_cause * len(c.causes) for k, c in cands.items()
-          if c.n_data > c.n_params}
+    ic = _information(cands, effective_dof(noise), t_cause)
     lo = min(ic.values()) if ic else 0.0
     raw = {k: math.exp(-(v - lo) / 2) for k, v in ic.items()}
     tot = sum(raw.values()) or 1.0
