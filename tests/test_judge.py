@@ -175,3 +175,12 @@ def test_an_estimated_noise_needs_a_larger_drop_but_keeps_the_causes_order():
     s = select(big, three)
     assert s.cause == "a" and not s.ambiguous
     assert s.weights["a"] / s.weights["b"] == pytest.approx(math.exp(25.0 / 2), rel=1e-9)
+
+
+@pytest.mark.parametrize("q, nu", [(1, 2.0), (2, 3.0), (3, 7.0), (2, math.inf)])
+def test_drop_for_known_noise_inverts_the_known_noise_equivalent(q, nu):
+    from inverse.judge import drop_for_known_noise, known_noise_equivalent
+    for known in (2.0, 2 * q + 6.0, 30.0):
+        raw = drop_for_known_noise(known, q, nu)
+        assert raw >= known
+        assert known_noise_equivalent(raw, q, nu) == pytest.approx(known, rel=1e-8)

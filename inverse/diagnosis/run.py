@@ -242,7 +242,8 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
          for k in averaged if held[k][2] is not None and not held[k][2].failed}, averaged)
     profiles, profile_failures = _profiles(fits[best], obs, effective_dof(noise))
     if sel.cause == "none" or sel.rivals or np.unique(obs.levels).size < 8:
-        sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS)
+        sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS,
+                           effective_dof(noise))
     else:
         sep = {"inseparable": [], "untestable": dict(untestable),
                "note": f"not analysed: {sel.cause} is named without a rival on "

@@ -4,9 +4,10 @@ levels, run order and noise.
 For each testable cause A, a noise-free series is built from the base fit plus A's
 signature (:func:`signature`) scaled so that A is *just* detectable: the base model
 misses it by ``chi2 = T + 2 q_A`` (``q_A`` A's extra parameters), i.e. A beats the
-base by the naming threshold ``T`` of :mod:`inverse.diagnose` in AIC. Every other single cause B is
-fitted to that series; A and B cannot be separated when B reaches at least the
-ambiguity fraction of A's weight there (``IC_B - IC_A < 2 ln(1/w)``), i.e. the
+base by the naming threshold ``T`` of :mod:`inverse.diagnose` in AIC (with a noise
+estimated on ``nu`` dof, by the drop whose known-noise equivalent that is). Every other
+single cause B is fitted to that series; A and B cannot be separated when B reaches at
+least the ambiguity fraction of A's weight there (``IC_B - IC_A < 2 ln(1/w)``), i.e. the
 measurement would call a just-detectable A ambiguous with B (or name B). A cause whose
 model cannot be fitted (too few data, no response column) is untestable.
 
@@ -15,13 +16,16 @@ cause's ``signature`` in :mod:`inverse.diagnosis.causes`.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import replace
+
 import numpy as np
 
 from inverse.diagnosis.fit import fit_model
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
 from inverse.diagnosis.models import Model, Observations
 from inverse.diagnosis.params import physical_parameters
+from inverse.judge import drop_for_known_noise
 
 __all__ = ["signature", "separability", "separating_measurement", "SEPARATING_MEASUREMENT"]
 #: What measurement separates two causes (physics of their signatures).
@@ -80,8 +84,11 @@ def _ic(fit, t_cause):
 
 
 def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
-                 t_cause: float, w_ambiguous: float) -> dict:
-    """Pairs of causes this design cannot separate, and untestable causes.
+                 t_cause: float, w_ambiguous: float, nu: float = math.inf) -> dict:
+    """Pairs of causes this design cannot separate, and untestable causes. ``nu``: the
+    noise's degrees of freedom (a just-detectable cause then needs the larger drop
+    whose known-noise equivalent is ``T + 2 q``, as :func:`inverse.judge.select` names
+    it).
 
     Returns ``{"inseparable": [{"causes": [A, B], "mimics": ..., "measurement": ...}],
     "untestable": {cause: reason}}``."""
@@ -108,7 +115,8 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
             continue
         scale = 1.0 / np.linalg.norm(e)
         ka = fits[a].n_params
-        need = t_cause + 2.0 * (ka - base.n_params)
+        need = drop_for_known_noise(t_cause + 2.0 * (ka - base.n_params),
+                                    ka - base.n_params, nu)
 
         def synth(c):
             vals = [pred[i] + c * eff[i] for i in range(len(obs.channels))]

@@ -53,10 +53,10 @@ from inverse.judge.bounds import Bounded, at_bound
 from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
                                  pooled_repeats, smooth_scatter)
 from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
-                                     Selection, effective_dof, fit_test,
-                                     known_noise_equivalent, select)
+                                     Selection, drop_for_known_noise, effective_dof,
+                                     fit_test, known_noise_equivalent, select)
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
            "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
-           "fit_test", "effective_dof", "known_noise_equivalent", "Candidate", "Selection",
-           "select", "Bounded", "at_bound"]
+           "fit_test", "effective_dof", "known_noise_equivalent", "drop_for_known_noise",
+           "Candidate", "Selection", "select", "Bounded", "at_bound"]

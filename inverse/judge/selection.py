@@ -11,7 +11,8 @@ from scipy import stats
 from inverse.judge.noise import NoiseModel
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "FitTest", "fit_test", "effective_dof",
-           "known_noise_equivalent", "Candidate", "Selection", "select"]
+           "known_noise_equivalent", "drop_for_known_noise", "Candidate", "Selection",
+           "select"]
 
 #: Tail probability below which a fit leaves the data outside their noise.
 P_UNEXPLAINED = 1e-3
@@ -140,6 +141,15 @@ def known_noise_equivalent(delta_chi2: float, q: int, nu: float) -> float:
         return float(delta_chi2)
     tail = float(stats.f.logsf(delta_chi2 / q, q, nu))
     return float(stats.chi2.isf(math.exp(tail), q)) if tail > -700 else float(delta_chi2)
+
+
+def drop_for_known_noise(known_drop: float, q: int, nu: float) -> float:
+    """The chi2 drop with a noise estimated on ``nu`` degrees of freedom whose
+    known-noise equivalent is ``known_drop``: the inverse of
+    :func:`known_noise_equivalent`, ``q F_{q,nu}.isf(chi2_q.sf(known_drop))``."""
+    if math.isinf(nu) or q <= 0 or known_drop <= 0:
+        return float(known_drop)
+    return float(q * stats.f.isf(stats.chi2.sf(known_drop, q), q, nu))
 
 
 def _information(cands: dict, nu: float, t_cause: float) -> dict:
