@@ -31,10 +31,6 @@ from inverse.diagnosis.models import Observations
 __all__ = ["leave_one_out", "held_out_top", "n_top"]
 
 
-def _rows(obs: Observations, mask):
-    return np.tile(mask, len(obs.channels))
-
-
 def leave_one_out(full: Fit, obs: Observations, iters: int = 12):
     """Leave-one-interior-level-out errors of ``full``'s model.
 
@@ -83,5 +79,5 @@ def held_out_top(full: Fit, obs: Observations):
     f = fit_model(full.model, obs, train, n_starts=2, iters=15)
     if f.failed:
         return None, "the fit to the lower levels failed", f
-    r = f.residual[_rows(obs, ~train)]
+    r = f.residual[obs.channel_rows(~train)]
     return float(np.sqrt(np.mean(r**2))), None, f

@@ -128,10 +128,6 @@ def satterthwaite(parts, nu):
     return V, (V**2 / den if den > 0 else math.inf)
 
 
-def _rows(obs: Observations, mask):
-    return np.tile(mask, len(obs.channels))
-
-
 def _free(fit, obs: Observations, rtol: float = 1e-3):
     """Masks of the free nonlinear and linear parameters (not on a bound)."""
     nl = np.array([not at_bound(v, lo, hi, rtol)[0]
@@ -165,7 +161,7 @@ def grid_posterior(fit, obs: Observations, f, chunk: int = 4096):
     (linear parameters solved on the training rows at each), and their weights
     ``exp(-(chi2_f(theta) - chi2_f(theta_hat)) / 2)`` normalized, ``chi2_f`` the
     training chi2 with channel ``c`` divided by its scale ``f[c]``."""
-    rows = _rows(obs, fit.train)
+    rows = obs.channel_rows(fit.train)
     axes = [a[3] for a in fit.model.nonlinear]
     grid = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
     th = np.vstack([fit.theta[None], grid])
@@ -188,14 +184,14 @@ def prediction_intervals(fit, obs: Observations, dof: dict, level: float = 0.95,
     predicted, interval, sd, dof, misfit_scale, inside}, zeta: {...}}``;
     ``predicted`` the posterior mean of eq. (4)."""
     train = np.asarray(fit.train, bool)
-    rows = _rows(obs, train)
+    rows = obs.channel_rows(train)
     J, n_lin = _jacobian(fit, obs)
     n, nch = obs.n, len(obs.channels)
     channel = np.repeat(np.arange(nch), n)[rows]
     noise_dof = [dof[ch] for ch in obs.channels]
     f, nu = misfit_scale(J[rows], fit.residual[rows], channel, noise_dof)
     if misfit_of is not None:
-        every = _rows(obs, misfit_of.train)
+        every = obs.channel_rows(misfit_of.train)
         fa, nua = misfit_scale(_jacobian(misfit_of, obs)[0][every], misfit_of.residual[every],
                                np.repeat(np.arange(nch), n)[every], noise_dof)
         f, nu = np.where(fa > f, fa, f), np.where(fa > f, nua, nu)

@@ -152,6 +152,11 @@ class Observations:
     def channels(self) -> list:
         return ["omega2", "zeta"] + (["response"] if self.log_r is not None else [])
 
+    def channel_rows(self, mask) -> np.ndarray:
+        """The rows of a level mask ``(n,)`` in the channel-stacked residual
+        ``(channels * n,)``."""
+        return np.tile(mask, len(self.channels))
+
 
 # --------------------------------------------------------------------------- design
 
