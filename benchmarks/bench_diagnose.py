@@ -36,6 +36,7 @@ for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import glob  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -179,6 +180,22 @@ def coverage(results):
     return (covered, total) if seen else None
 
 
+#: Visibility bins (noise units) of the singles' breakdown.
+VISIBILITY_BINS = (0.0, 6.0, 15.0, math.inf)
+
+
+def by_visibility(rows, path):
+    """Singles named per bin of their effect's visibility (:data:`VISIBILITY_BINS`; the
+    generator's own measure, recorded in its truth), as words."""
+    parts = []
+    for lo, hi in zip(VISIBILITY_BINS[:-1], VISIBILITY_BINS[1:]):
+        sub = [r for r in rows if (r.get("visibility") or [None])[0] is not None
+               and lo <= min(v for v in r["visibility"] if v is not None) < hi]
+        ok = sum(right(r["truth"], r["results"][path]) for r in sub)
+        parts.append(f"{lo:g}-{hi:g}: {ok}/{len(sub)}")
+    return ", ".join(parts)
+
+
 def score(rows, gen, path):
     """The acceptance numbers of one generator and noise path; prints and returns them."""
     got = [(r.get("truth"), r["results"][path]) for r in rows]
@@ -201,6 +218,8 @@ def score(rows, gen, path):
     print(f"  singles named           {pct(s)}   (target >= 90 %)")
     print(f"  pairs, both named       {pct(p)}   (target >= 80 %)")
     print(f"  out of catalogue -> unexplained {pct(o)}   (target >= 80 %)")
+    print("  singles named by visibility (the generator's top-level change, noise units): "
+          + by_visibility([r for r in rows if category(r.get("truth")) == "single"], path))
     print(f"  none called otherwise   {none_other}/{n[1]}   (target <= 1 in 10)")
     print(f"  held-out 95 % interval coverage {cov_txt}   (target 90-98 %)")
     ok = (s[0] >= 0.9 * s[1] and p[0] >= 0.8 * p[1] and o[0] >= 0.8 * o[1]
@@ -264,7 +283,9 @@ def main(argv=None) -> int:
                 t = dev[r["seed"] // 1000][0][name]
                 r["truth"] = list(t["causes"])
                 r.update(control=t["control"], rep_on=bool(t["repeatability"]["on"]),
-                         repeats=int(bool(t.get("repeat"))))
+                         repeats=int(bool(t.get("repeat"))),
+                         visibility=[v.get("visibility") for v in
+                                     (t.get("visibility") or {}).values()])
         print_cases(rows)
         summary = {}
         for gen in ("own", "gen_dev"):

@@ -72,6 +72,13 @@ def threshold(dof: float) -> float:
     return float(stats.t.isf(stats.norm.sf(Z_STATE), max(dof, 1.0)))
 
 
+def _beyond(z: float, dof: float) -> str:
+    """Words for how far a contradiction lies beyond the noise and the size it had to
+    exceed (:func:`threshold`)."""
+    how = "known noise" if math.isinf(dof) else f"noise estimated on {dof:.3g} dof"
+    return f" ({z:.3g} noise sd; stated beyond {threshold(dof):.3g} sd, {how})"
+
+
 @dataclass
 class Contradiction:
     """One plain statement with the numbers behind it."""
@@ -130,7 +137,8 @@ def _frequency_rise(d, sig: NoiseLevels) -> Contradiction | None:
     text = (f"the natural frequency rises by {_pct(f_b / f_a - 1.0)} ({f_a:.6g} -> "
             f"{f_b:.6g} Hz, level {d.level[a]} -> {d.level[b]}) while the damping ratio "
             f"grows {growth:.3g}x ({100 * z[a]:.4g} % -> {100 * z[b]:.4g} %): an Iwan "
-            f"joint only lowers the frequency as it adds damping")
+            f"joint only lowers the frequency as it adds damping"
+            + _beyond(float(z_rise[k]), sig.dof_omega2))
     return Contradiction("frequency-rises", text, {
         "levels": [int(d.level[a]), int(d.level[b])],
         "frequency_hz": [f_a, f_b], "frequency_change": f_b / f_a - 1.0,
@@ -160,7 +168,8 @@ def _tie(d, sig: NoiseLevels) -> Contradiction | None:
             f"{100 * (1 - math.sqrt(1 - least / w[a])):.3g} % at {f_a:.6g} Hz); the data "
             f"lose {loss:.4g} rad^2/s^2 ({100 * (1 - math.sqrt(1 - loss / w[a])):.3g} %), "
             f"{least / max(loss, 1e-300):.3g}x less; only slip past phi_max (macro-slip) or "
-            f"damping from elsewhere can do that")
+            f"damping from elsewhere can do that"
+            + _beyond(margin, min(sig.dof_omega2, sig.dof_zeta)))
     return Contradiction("tie-violated", text, {
         "levels": [int(d.level[a]), int(d.level[b])], "omega2_loss": float(loss),
         "joint_damping_growth": float(growth_c), "least_loss_micro_slip": float(least),

@@ -184,3 +184,62 @@ def test_drop_for_known_noise_inverts_the_known_noise_equivalent(q, nu):
         raw = drop_for_known_noise(known, q, nu)
         assert raw >= known
         assert known_noise_equivalent(raw, q, nu) == pytest.approx(known, rel=1e-8)
+
+
+def test_known_noise_equivalent_beyond_double_precision():
+    """Drops whose F tail underflows (the tail below e^-700) keep the mapping: it rises
+    with the drop, joins the exact branch without a jump, and for nu -> inf tends to
+    the drop itself (q F(q, nu) -> chi2_q)."""
+    from scipy import stats
+
+    from inverse.judge import known_noise_equivalent
+
+    for q, nu in ((1, 1e6), (3, 1e6), (1, 1000.0)):
+        drops = np.geomspace(200.0, 1e8, 400)
+        mapped = np.array([known_noise_equivalent(d, q, nu) for d in drops])
+        assert np.all(np.diff(mapped) > 0)
+        tails = np.array([stats.f.logsf(d / q, q, nu) for d in drops])
+        k = int(np.argmax(~(tails > -700)))          # first drop past the exact branch
+        if k:
+            assert mapped[k] / mapped[k - 1] < drops[k] / drops[k - 1] * 1.001
+        if nu > 1e5:                                 # (for drops well below nu)
+            small = drops < 0.01 * nu
+            assert np.all(np.abs(mapped[small] / drops[small] - 1) < 0.02)
+
+
+def test_a_drop_in_one_channel_takes_that_channels_dof():
+    """Two channels of 10 levels: omega2 with its noise estimated on 40 dof, the
+    response on 4 dof (planted Gaussian noise, estimated from planted repeats). A cause
+    adds one parameter seen by the response only (a planted regressor, no effect). Its
+    drop of chi2, mapped with the drop's own dof (:func:`drop_dof`), is chi-square(1);
+    mapped with the channels pooled (effective_dof, 14.5 dof here) it exceeds its 99 %
+    quantile about 3x too often."""
+    from dataclasses import replace
+
+    from inverse.judge import drop_dof, effective_dof, known_noise_equivalent
+    rng = np.random.default_rng(91)
+    n = 10
+    base_noise = noise_model(np.arange(1.0, n + 1), {"omega2": np.full(n, 1e6),
+                                                     "response": np.zeros(n)},
+                             {"omega2": np.full(n, 10.0), "response": None}, np.arange(n))
+    noise = replace(base_noise, dof={"omega2": 40.0, "response": 4.0})
+    reg = rng.standard_normal(n)
+    pooled, own = [], []
+    for _ in range(3000):
+        s2_w = rng.chisquare(40) / 40          # estimated variances / true (unit) ones
+        s2_r = rng.chisquare(4) / 4
+        e_w, e_r = rng.standard_normal(n), rng.standard_normal(n)
+        c_w, c_r = e_w @ e_w / s2_w, e_r @ e_r / s2_r
+        proj = (e_r @ reg) ** 2 / (reg @ reg) / s2_r        # the cause's fit of e_r
+        base = Candidate((), 2, c_w + c_r, 2 * n, chi2_by_channel={"omega2": c_w,
+                                                                   "response": c_r})
+        cause = Candidate(("x",), 3, c_w + c_r - proj, 2 * n,
+                          chi2_by_channel={"omega2": c_w, "response": c_r - proj})
+        nu = drop_dof(base, cause, noise)
+        assert nu == pytest.approx(4.0)
+        own.append(known_noise_equivalent(proj, 1, nu))
+        pooled.append(known_noise_equivalent(proj, 1, effective_dof(noise)))
+    q99 = stats.chi2.ppf(0.99, 1)
+    assert np.mean(np.array(pooled) > q99) > 2.5 * 0.01
+    assert abs(np.mean(np.array(own) > q99) - 0.01) < 0.006
+    assert stats.kstest(own, stats.chi2(1).cdf).pvalue > 0.01

@@ -70,3 +70,24 @@ def test_a_run_order_step_or_drift_is_not_taken_as_repeatability(kind):
         return -30 * sd * (1 - np.exp(-t / 1.5))
     r = _ratios(23, 200, effect)[:, 0]
     assert np.median(r) < 2.5, np.quantile(r, [0.1, 0.5, 0.9])
+
+
+def test_every_channel_takes_its_own_chosen_curve():
+    """``noise_model`` gives each channel the scatter about the curve chosen for that
+    channel (omega2 and zeta of a planted series, then a third channel): before
+    session 7 only the first channel did, the others took a fixed Muntz curve."""
+    from inverse.judge import noise_model
+
+    rng = np.random.default_rng(41)
+    for _ in range(20):
+        x, lw, lz, _, _, t = planted_series(rng)
+        n = x.size
+        resp = 0.3 * np.sin(3 * x) + 0.05 * rng.standard_normal(n)
+        nm = noise_model(np.exp(x), {"omega2": np.exp(lw), "zeta": np.exp(lz), "resp": resp},
+                         {}, np.arange(n), run_order=t)
+        for c, y in (("omega2", lw), ("zeta", lz), ("resp", resp)):
+            sd, dof = smooth_scatter(x, y, None if np.all(np.diff(t) > 0) else t)
+            got = nm.repeatability[c] / (np.exp(y) if c != "resp" else 1.0)
+            if dof:
+                assert nm.dof[c] == dof
+                np.testing.assert_allclose(got, sd, rtol=1e-9)

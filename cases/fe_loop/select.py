@@ -44,10 +44,15 @@ MICRO_LIMIT = 50.0
 
 def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
     """Parameters of the base model and their starts; the start list holds the paper's
-    estimator (``exact``, the fit levels) and three others of chi."""
+    estimator (``exact``, the fit levels), two others of chi and, when the estimator
+    gave the first, the start from the first level alone (the frequency bounds hold
+    both)."""
     lv = [int(v) for v in data.level[mask]]
     w1 = math.sqrt(float(data.omega2[0]))
-    chi0, dc0, zv0, f00 = -0.4, 2.0 * float(data.omega2[0]) * 1e-4, float(data.zeta[0]), w1 / (2 * math.pi)
+    naive = {"chi": -0.4, "ln_dc1": math.log(2.0 * float(data.omega2[0]) * 1e-4),
+             "zeta_v": float(data.zeta[0]), "f0_hz": w1 / (2 * math.pi)}
+    chi0, dc0 = naive["chi"], math.exp(naive["ln_dc1"])
+    zv0, f00 = naive["zeta_v"], naive["f0_hz"]
     try:
         est = estimate(data, fit_levels=lv, method="exact")
         if -0.98 < est.chi < -0.005 and est.kappa1_B > 0:
@@ -61,7 +66,8 @@ def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
                              "ln |kappa1| B~ at level 1: the joints' modal damping there"),
          "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
                              "viscous modal damping ratio"),
-         "f0_hz": Parameter("f0_hz", f00, 0.95 * f00, 1.05 * f00, 1e-3, "Hz",
+         "f0_hz": Parameter("f0_hz", f00, 0.95 * min(f00, naive["f0_hz"]),
+                            1.05 * max(f00, naive["f0_hz"]), 1e-3, "Hz",
                             "stuck-joint natural frequency of the mode"),
          "log10_kt": Parameter("log10_kt", math.log10(fe.default_kt),
                                6.0, 11.0, 0.5, "log10 N/m",
@@ -70,6 +76,8 @@ def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
                                 "1", "ln(phi_max / a_ref): macro-slip onset in units of "
                                 "the level-1 joint slip (beta = 0 above its limit)")}
     starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
+    if est is not None and chi0 != naive["chi"]:   # a noisy series can mislead the estimator
+        starts.append(naive)
     return P, starts
 
 

@@ -145,9 +145,11 @@ def _candidates(fits, cv, obs, refuted):
                     else _inactive(f, obs) if k != "none" else None)
         if f.failed:
             excluded, failed = "the fit failed", failed + 1
+        r = f.residual.reshape(len(obs.channels), obs.n)[:, np.asarray(f.train, bool)]
         out.append(Candidate(f.model.causes, f.n_params, f.chi2, f.n_data,
                              gain=1.0 if k == "none" else gain, failures=failed,
-                             excluded=excluded))
+                             excluded=excluded,
+                             chi2_by_channel=dict(zip(obs.channels, np.sum(r**2, axis=1)))))
     return out
 
 

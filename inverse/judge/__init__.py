@@ -39,7 +39,11 @@ from the base model, ``q`` parameters more, is ``q F(q, nu)`` under no effect, f
 heavier-tailed than ``chi-square(q)`` at small ``nu`` (``P(F(2, 3) > 5) = 0.11``
 against ``P(chi2_2 > 10) = 0.007``). The drop enters the IC at its known-noise
 equivalent of equal tail probability (:func:`known_noise_equivalent`), so a cause is
-named at the same false-alarm rate whatever the noise's degrees of freedom. A candidate is *eligible* when its fit test
+named at the same false-alarm rate whatever the noise's degrees of freedom. The ``nu``
+of a drop is that of the channels it comes from (:func:`drop_dof`: Satterthwaite with
+each channel weighted by its share of the drop): a force shortfall found in the
+response channel alone is judged on that channel's few degrees of freedom, not on all
+channels pooled. A candidate is *eligible* when its fit test
 gives ``p >= P_UNEXPLAINED``, it is not excluded (a refuted base model, an inactive
 extension) and, if it names a cause, its held-out gain exceeds 1 (a gain over failed
 folds is None: not eligible). The named explanation is the eligible candidate of
@@ -53,10 +57,12 @@ from inverse.judge.bounds import Bounded, at_bound
 from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
                                  pooled_repeats, smooth_scatter)
 from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
-                                     Selection, drop_for_known_noise, effective_dof,
+                                     Selection, drop_dof, drop_for_known_noise,
+                                     effective_dof,
                                      fit_test, known_noise_equivalent, select)
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
            "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
-           "fit_test", "effective_dof", "known_noise_equivalent", "drop_for_known_noise",
+           "fit_test", "effective_dof", "drop_dof", "known_noise_equivalent",
+           "drop_for_known_noise",
            "Candidate", "Selection", "select", "Bounded", "at_bound"]

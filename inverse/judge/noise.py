@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 __all__ = ["MIN_REPEAT_DOF", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
-           "muntz_scatter", "pooled_repeats"]
+           "pooled_repeats"]
 
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
 MIN_REPEAT_DOF = 6
@@ -160,65 +160,6 @@ def smooth_scatter(x, y, t=None):
     return _scatter(x, y, t)[:2]
 
 
-def _contrast(x):
-    """Unit contrast over the points ``x`` (k,) orthogonal to polynomials of degree
-    ``k - 2`` (the last left singular vector of the Vandermonde matrix)."""
-    V = np.vander(x - x.mean(), len(x) - 1, increasing=True)
-    q, _ = np.linalg.qr(V, mode="complete")
-    return q[:, -1]
-
-
-def _residual_scatter(B, y):
-    """(sd, dof) of ``y`` about its least-squares projection on the columns of ``B``."""
-    coef, _, rank, _ = np.linalg.lstsq(B, y, rcond=1e-10)
-    dof = B.shape[0] - int(rank)
-    return float(np.sqrt(np.sum((y - B @ coef) ** 2) / dof)), dof
-
-
-def muntz_scatter(x, y, t=None):
-    """The earlier, more conservative curve (kept for the FE level, module doc): scatter
-    of ``y`` (n,) about one fixed curve over ``x`` (n,): (sd, degrees of freedom).
-
-    The curve: a Muntz polynomial in the relative amplitude ``s = exp(x - max x)``,
-    ``1, ln s, s^(1/3), s^(2/3), s`` (any power law of amplitude to a few 1e-4 of its
-    range: the local-polynomial alternative leaves 1e-2 at level ratios of 2.5), plus
-    ``t, t^2`` of the run order ``t`` (when given: a drift with time is not scatter;
-    ``t`` alone, then neither, when the levels are too few), when that leaves at least 3
-    degrees of freedom. Otherwise local quadratic contrasts
-    over windows of four points (linear over three when n = 3), one degree of freedom
-    each, projected on those blind to the trend in ``t`` when given (two fewer);
-    (0, 0) for n < 3."""
-    order = np.argsort(x, kind="stable")
-    x, y = np.asarray(x, float)[order], np.asarray(y, float)[order]
-    n = x.size
-    if n < 3:
-        return 0.0, 0
-    sr = np.exp(x - x.max())
-    cols = [np.ones(n), x - x.mean(), sr ** (1 / 3), sr ** (2 / 3), sr]
-    trend = []
-    if t is not None:
-        tt = np.asarray(t, float)[order]
-        tt = (tt - tt.mean()) / (np.ptp(tt) or 1.0)
-        trend = [tt, tt**2]
-    for k in range(len(trend), -1, -1):        # t, t^2; then t; then none
-        if n - len(cols) - k >= 3:
-            return _residual_scatter(np.column_stack(cols + trend[:k]), y)
-    cols += trend
-    w = 4 if n >= 4 else 3
-    C = np.zeros((n - w + 1, n))
-    for i in range(n - w + 1):
-        C[i, i:i + w] = _contrast(x[i:i + w])
-    if t is None or C.shape[0] <= 3:
-        d = C @ y
-        return float(np.sqrt(np.mean(d**2))), int(d.size)
-    T = C @ np.column_stack(cols[-2:])                     # the trend in t seen by C
-    _, sv, vt = np.linalg.svd(T.T)
-    A = vt[int(np.sum(sv > 1e-9 * max(sv.max(), 1e-300))):].T   # combinations blind to it
-    Q, sv2, _ = np.linalg.svd(C.T @ A, full_matrices=False)
-    d = Q[:, sv2 > 1e-9 * sv2.max()].T @ y
-    return float(np.sqrt(np.mean(d**2))), int(d.size)
-
-
 def pooled_repeats(groups, y, relative: bool = True):
     """Pooled within-group variance of ``y`` (n,) (relative to each group's mean when
     ``relative``; ``groups`` (n,) labels): (sd, dof), (0, 0) without repeats."""
@@ -238,8 +179,7 @@ def _plural(n, word):
 
 
 def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
-                floors: dict | None = None, model_error: dict | None = None,
-                curve: str = "chosen") -> NoiseModel:
+                floors: dict | None = None, model_error: dict | None = None) -> NoiseModel:
     """Identification uncertainty plus the test's repeatability (module doc).
 
     Parameters
@@ -277,9 +217,8 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         means = np.array([np.mean(y[level_ids == g]) for g in labels])
         xm = np.array([np.mean(x[level_ids == g]) for g in labels])
         ym = np.log(means) if rel else means
-        s_s, nu_s, stepped = (_scatter(xm, ym, tm) if curve == "chosen"
-                              else (*muntz_scatter(xm, ym, tm), None))
-        curve = f"scatter about a smooth curve ({nu_s} dof)" + (
+        s_s, nu_s, stepped = _scatter(xm, ym, tm)
+        curve_words = f"scatter about a smooth curve ({nu_s} dof)" + (
             f" with {stepped} in run order taken out" if stepped else "")
         if nu_r >= MIN_REPEAT_DOF:
             s2, nu = s_r**2, nu_r
@@ -288,11 +227,11 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
             nu = nu_r + nu_s
             s2 = (nu_r * s_r**2 + nu_s * s_s**2) / nu
             words = (f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof) pooled with the "
-                     f"{curve}")
+                     f"{curve_words}")
             kd = "repeats+smooth"
         else:
             s2, nu = s_s**2, nu_s
-            words, kd = curve, "smooth"
+            words, kd = curve_words, "smooth"
         id_rel2 = float(np.mean((idn / scale) ** 2))
         r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
         r = r_rel * scale

@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
+from scipy import optimize, special, stats
 
 from inverse.judge.noise import NoiseModel
 
@@ -55,6 +55,24 @@ def effective_dof(noise: NoiseModel) -> float:
     return n_all**2 / sum(n**2 / nu for n, nu in est)
 
 
+def drop_dof(base: "Candidate", cand: "Candidate", noise: NoiseModel) -> float:
+    """Degrees of freedom of the noise behind the chi2 drop from ``base`` to ``cand``
+    (module doc): Satterthwaite over the channels, each weighted by its share of the
+    drop, ``(sum_c d_c)^2 / sum_c (d_c^2 / nu_c)`` with ``d_c`` the positive part of
+    the channel's drop (a drop made in a channel whose noise was estimated on few
+    degrees of freedom is as uncertain as that estimate). :func:`effective_dof` when
+    either candidate lacks ``chi2_by_channel`` or nothing drops."""
+    if base.chi2_by_channel is None or cand.chi2_by_channel is None:
+        return effective_dof(noise)
+    d = {c: max(0.0, base.chi2_by_channel[c] - cand.chi2_by_channel.get(c, 0.0))
+         for c in base.chi2_by_channel}
+    total = sum(d.values())
+    if not 0.0 < total < math.inf:
+        return effective_dof(noise)
+    den = sum(v**2 / noise.dof[c] for c, v in d.items() if not math.isinf(noise.dof[c]))
+    return math.inf if den == 0.0 else total**2 / den
+
+
 def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitTest:
     """Chi-square test with known noise, F test with an estimated repeatability
     (module doc)."""
@@ -75,7 +93,9 @@ def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitT
 class Candidate:
     """One explanation: ``causes`` (() for the base model), ``n_params``, ``chi2`` on
     ``n_data`` data, held-out ``gain`` (None: folds failed or too few data), ``failures``
-    (failed fits or folds), ``excluded`` (a reason it may not be named, or None)."""
+    (failed fits or folds), ``excluded`` (a reason it may not be named, or None),
+    ``chi2_by_channel`` (``{channel: chi2}``, optional: the drop's degrees of freedom,
+    :func:`drop_dof`)."""
 
     causes: tuple
     n_params: int
@@ -84,6 +104,7 @@ class Candidate:
     gain: float | None = None
     failures: int = 0
     excluded: str | None = None
+    chi2_by_channel: dict | None = None
 
     @property
     def name(self) -> str:
@@ -140,7 +161,20 @@ def known_noise_equivalent(delta_chi2: float, q: int, nu: float) -> float:
     if math.isinf(nu) or q <= 0 or delta_chi2 <= 0:
         return float(delta_chi2)
     tail = float(stats.f.logsf(delta_chi2 / q, q, nu))
-    return float(stats.chi2.isf(math.exp(tail), q)) if tail > -700 else float(delta_chi2)
+    if not math.isfinite(tail):      # F_{q,nu} tail = I_y(nu/2, q/2), y = nu/(nu + drop):
+        y, a, b = nu / (nu + delta_chi2), 0.5 * nu, 0.5 * q     # its leading term
+        tail = (a * math.log(y) + (b - 1) * math.log1p(-y) - math.log(a)
+                - float(special.betaln(a, b)))
+    if tail > -700:
+        return float(stats.chi2.isf(math.exp(tail), q))
+    # beyond double precision: solve ln Q(q/2, x/2) = tail with the asymptotic upper
+    # incomplete gamma, ln Q(a, z) ~ (a-1) ln z - z - ln Gamma(a) + ln(1 + (a-1)/z)
+    a = 0.5 * q
+    def log_sf(x):
+        z = 0.5 * x
+        return (a - 1) * math.log(z) - z - math.lgamma(a) + math.log1p((a - 1) / z)
+    return float(optimize.brentq(lambda x: log_sf(x) - tail, 2.0 * q + 2.0,
+                                 4.0 * abs(tail) + 100.0 * q))
 
 
 def drop_for_known_noise(known_drop: float, q: int, nu: float) -> float:
@@ -152,7 +186,7 @@ def drop_for_known_noise(known_drop: float, q: int, nu: float) -> float:
     return float(q * stats.f.isf(stats.chi2.sf(known_drop, q), q, nu))
 
 
-def _information(cands: dict, nu: float, t_cause: float) -> dict:
+def _information(cands: dict, noise: NoiseModel, t_cause: float) -> dict:
     """``IC = chi2 + 2k + T n_causes`` of every candidate that can be fitted (module
     doc). With an estimated noise the causes' ICs are raised together, by as much as
     the best of them rises when its drop from the base model is taken at its
@@ -162,11 +196,12 @@ def _information(cands: dict, nu: float, t_cause: float) -> dict:
           if c.n_data > c.n_params}
     base = cands.get("none")
     causes = [k for k in ic if k != "none"]
-    if "none" not in ic or not causes or math.isinf(nu):
+    if "none" not in ic or not causes:
         return ic
     drop = {k: base.chi2 - cands[k].chi2 for k in causes}
     mapped = [ic[k] + drop[k] - known_noise_equivalent(
-        drop[k], cands[k].n_params - base.n_params, nu) for k in causes]
+        drop[k], cands[k].n_params - base.n_params, drop_dof(base, cands[k], noise))
+        for k in causes]
     shift = max(0.0, min(mapped) - min(ic[k] for k in causes))
     return {k: v + (shift if k != "none" else 0.0) for k, v in ic.items()}
 
@@ -176,7 +211,7 @@ def select(candidates, noise: NoiseModel, t_cause: float = T_CAUSE,
     """The one model-selection rule (module doc) over ``candidates``
     (:class:`Candidate`; the base model has ``causes = ()``)."""
     cands = {c.name: c for c in candidates}
-    ic = _information(cands, effective_dof(noise), t_cause)
+    ic = _information(cands, noise, t_cause)
     lo = min(ic.values()) if ic else 0.0
     raw = {k: math.exp(-(v - lo) / 2) for k, v in ic.items()}
     tot = sum(raw.values()) or 1.0
