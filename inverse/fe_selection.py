@@ -155,6 +155,12 @@ def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None)
             break
         top = max((sel.weights[k] for k in sel.eligible), default=0.0)
         need = [c for c in pending if sel.weights[c.name] >= W_AMBIGUOUS * top]
+        named = next((c for c in cands if c.name == sel.best), None)
+        if not need and named is not None and len(named.causes) > 1:
+            # a pair is named only when it predicts unseen levels better than its
+            # causes alone: their gains are needed too
+            need = [c for c in cands if len(c.causes) == 1 and c.causes[0] in named.causes
+                    and not c.cv_done and c.fit is not None]
         if not need:
             break
         _cv(max(need, key=lambda c: sel.weights[c.name]), say)

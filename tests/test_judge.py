@@ -243,3 +243,20 @@ def test_a_drop_in_one_channel_takes_that_channels_dof():
     assert np.mean(np.array(pooled) > q99) > 2.5 * 0.01
     assert abs(np.mean(np.array(own) > q99) - 0.01) < 0.006
     assert stats.kstest(own, stats.chi2(1).cdf).pvalue > 0.01
+
+
+def test_a_pair_is_named_only_when_its_second_cause_predicts_better():
+    """A pair whose held-out gain is not above that of one of its causes alone is not
+    named (the cause alone is); a pair that predicts unseen levels better is."""
+    noise = noise_model(np.arange(1.0, 11.0), {"omega2": np.full(10, 1e6)},
+                        {"omega2": np.full(10, 10.0)}, np.arange(10))
+    base = Candidate((), 3, 60.0, 20, gain=1.0)
+    a = Candidate(("a",), 4, 20.0, 20, gain=1.5)
+    b = Candidate(("b",), 4, 40.0, 20, gain=1.1)
+    idle = Candidate(("a", "b"), 5, 5.0, 20, gain=1.4)      # chi2 far lower, gain not
+    sel = select([base, a, b, idle], noise)
+    assert sel.cause == "a" and sel.also == []
+    assert "not above a alone" in sel.why_not["a+b"]
+    busy = Candidate(("a", "b"), 5, 5.0, 20, gain=2.0)
+    sel = select([base, a, b, busy], noise)
+    assert sel.cause in ("a", "b") and set([sel.cause] + sel.also) == {"a", "b"}

@@ -46,7 +46,9 @@ response channel alone is judged on that channel's few degrees of freedom, not o
 channels pooled. A candidate is *eligible* when its fit test
 gives ``p >= P_UNEXPLAINED``, it is not excluded (a refuted base model, an inactive
 extension) and, if it names a cause, its held-out gain exceeds 1 (a gain over failed
-folds is None: not eligible). The named explanation is the eligible candidate of
+folds is None: not eligible) and, for several causes, that of each of its causes alone
+(where known: the added cause must predict unseen levels better). The named
+explanation is the eligible candidate of
 largest weight; none eligible: ``unexplained``, with the closest miss and why it
 missed. ``ambiguous`` when another eligible candidate has at least
 :data:`W_AMBIGUOUS` of the named one's weight.

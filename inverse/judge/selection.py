@@ -149,6 +149,21 @@ def _why_not(c: Candidate, test: FitTest, p_min: float):
     return None
 
 
+def _second_cause_idle(c: Candidate, cands: dict):
+    """Why a candidate of several causes may not be named although its held-out gain
+    exceeds 1: not above the gain of one of its causes alone (when that is known), so
+    the added cause does not predict unseen levels better (module doc); else None."""
+    if len(c.causes) < 2 or c.gain is None:
+        return None
+    for cause in c.causes:
+        alone = cands.get(cause)
+        if alone is not None and alone.gain is not None and c.gain <= alone.gain:
+            return (f"held-out gain {c.gain:.3g} not above {cause} alone "
+                    f"({alone.gain:.3g}): the second cause does not predict unseen levels "
+                    f"better")
+    return None
+
+
 def known_noise_equivalent(delta_chi2: float, q: int, nu: float) -> float:
     """The chi-square drop with known noise that is as improbable as ``delta_chi2``
     with a noise estimated on ``nu`` degrees of freedom (module doc of
@@ -217,7 +232,8 @@ def select(candidates, noise: NoiseModel, t_cause: float = T_CAUSE,
     tot = sum(raw.values()) or 1.0
     weights = {k: raw.get(k, 0.0) / tot for k in cands}
     tests = {k: fit_test(c.chi2, c.n_data, c.n_params, noise) for k, c in cands.items()}
-    why = {k: _why_not(c, tests[k], p_min) for k, c in cands.items()}
+    why = {k: _why_not(c, tests[k], p_min) or _second_cause_idle(c, cands)
+           for k, c in cands.items()}
     eligible = [k for k in cands if why[k] is None]
     if eligible:
         best = max(eligible, key=weights.get)
