@@ -215,7 +215,9 @@ def score(rows, gen, path):
         f"{cov[0]}/{cov[1]} = {100 * cov[0] / max(cov[1], 1):.1f} %" + (
             "" if cov[1] >= 200 else " (fewer than 200 predictions)"))
     print(f"\n[{gen}, {path}] {len(got)} cases, {errors} errors")
-    print(f"  singles named           {pct(s)}   (target >= 90 %)")
+    alone = sum(right(t, r) and not r.get("also") for t, r in by["single"])
+    print(f"  singles named           {pct(s)}   (target >= 90 %; "
+          f"{alone} without a second cause, as bench_fe_hidden_effect scores)")
     print(f"  pairs, both named       {pct(p)}   (target >= 80 %)")
     print(f"  out of catalogue -> unexplained {pct(o)}   (target >= 80 %)")
     print("  singles named by visibility (the generator's top-level change, noise units): "
