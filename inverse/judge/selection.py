@@ -184,10 +184,12 @@ def known_noise_equivalent(delta_chi2: float, q: int, nu: float) -> float:
         return float(stats.chi2.isf(math.exp(tail), q))
     # beyond double precision: solve ln Q(q/2, x/2) = tail with the asymptotic upper
     # incomplete gamma, ln Q(a, z) ~ (a-1) ln z - z - ln Gamma(a) + ln(1 + (a-1)/z)
-    a = 0.5 * q
+    h = 0.5 * q
+
     def log_sf(x):
         z = 0.5 * x
-        return (a - 1) * math.log(z) - z - math.lgamma(a) + math.log1p((a - 1) / z)
+        return (h - 1) * math.log(z) - z - math.lgamma(h) + math.log1p((h - 1) / z)
+
     return float(optimize.brentq(lambda x: log_sf(x) - tail, 2.0 * q + 2.0,
                                  4.0 * abs(tail) + 100.0 * q))
 
