@@ -108,22 +108,10 @@ def _candidates(cands, base_cv) -> list:
         if c.causes and c.cv_done and c.cv_error is not None and base_cv is not None:
             gain = base_cv / c.cv_error if c.cv_error > 0 else math.inf
         if c.chi2_by_channel is None:
-            c.chi2_by_channel = _chi2_by_channel(c)
+            c.chi2_by_channel = c.problem.chi2_by_channel(c.fit.values)
         out.append(Candidate(c.causes, c.fit.k, c.fit.chi2, c.fit.n, gain, c.cv_failed,
                              c.excluded, c.chi2_by_channel or None))
     return out
-
-
-def _chi2_by_channel(c: FitCandidate) -> dict:
-    """``{"omega2": chi2, "zeta": chi2}`` of a fitted candidate on its fit levels (the
-    residual vector holds the omega2 rows, then the zeta rows), ``{}`` when the
-    simulation fails (counted as every failure is)."""
-    failures = c.problem.failures
-    r = c.problem.residuals(c.fit.values)
-    if c.problem.failures != failures:
-        return {}
-    h = r.size // 2
-    return {"omega2": float(r[:h] @ r[:h]), "zeta": float(r[h:] @ r[h:])}
 
 
 def _reason(c: FitCandidate, sel) -> str | None:

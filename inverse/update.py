@@ -113,6 +113,17 @@ class UpdateProblem:
             self.failures += 1
         return np.where(np.isfinite(r), r, _FAILED)
 
+    def chi2_by_channel(self, values: dict, mask=None) -> dict:
+        """Eq. (1)'s chi2 per channel, ``{"omega2": .., "zeta": ..}``, on ``mask``
+        (default the fit levels); ``{}`` when the simulation fails (counted in
+        ``failures``)."""
+        before = self.failures
+        r = self.residuals(values, mask)
+        if self.failures != before:
+            return {}
+        h = r.size // 2                       # the omega2 rows, then the zeta rows
+        return {"omega2": float(r[:h] @ r[:h]), "zeta": float(r[h:] @ r[h:])}
+
 
 @dataclass
 class Fit:
