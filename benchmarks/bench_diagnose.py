@@ -49,6 +49,7 @@ import numpy as np  # noqa: E402
 from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
                                     without_stds)
 from inverse.diagnose import diagnose  # noqa: E402
+from oracle import NO_BOUND, detection_bound, dev_oracle, naming_power, own_oracle  # noqa: E402
 from runs.executor import ExecutorSpec, run_sweep  # noqa: E402
 
 DEV = Path(os.environ.get("IWANFE_DEV_BENCH",
@@ -77,6 +78,7 @@ def _diagnose(data):
     return {"cause": r["cause"], "also": list(r["also"]),
             "held_out_predictions": r.get("held_out_predictions"),
             "evidence": ev, "noise": {k: v.get("source") for k, v in (r.get("noise") or {}).items()},
+            "noise_dof": {k: v.get("dof") for k, v in (r.get("noise") or {}).items()},
             "seconds": time.perf_counter() - t0}
 
 
@@ -93,6 +95,20 @@ def _dev_data(case_dir):
             note = f"repeat refused: {str(exc)[:60]}"
             return load_series(files), note
     return load_series(files), ""
+
+
+def _oracle(gen, data, truth):
+    """``lam`` of :mod:`oracle` (None with the reason in ``oracle_error``)."""
+    try:
+        if gen == "own":
+            return {"lam": own_oracle(data, truth)}
+        t = json.loads((truth.parent / "truth_dev.json").read_text())["cases"][truth.name]
+        first = {(v + 1, int(k)) for v, k in enumerate(t["run_order"])}
+        keep = [i for i, (lv, ro) in enumerate(zip(data.level, data.run_order))
+                if (int(lv), int(ro)) in first]
+        return {"lam": dev_oracle(data.take(keep), t, DEV / "gen_dev.py")}
+    except Exception as exc:                       # noqa: BLE001 (counted, printed)
+        return {"lam": None, "error": f"{type(exc).__name__}: {str(exc)[:80]}"}
 
 
 def run_case(job):
@@ -116,6 +132,7 @@ def run_case(job):
         out["results"] = {p: {"error": out["error"]} for p in PATHS}
         return out
     out["t_data"] = time.perf_counter() - t0
+    out["oracle"] = _oracle(gen, data, t if gen == "own" else Path(case_dir))
     out["results"] = {PATHS[0]: _diagnose(data), PATHS[1]: _diagnose(without_stds(data))}
     return out
 
@@ -196,6 +213,30 @@ def by_visibility(rows, path):
     return ", ".join(parts)
 
 
+def _judge_nu(result):
+    """The noise dof the judge had on omega2 and zeta, summed (inf when known)."""
+    dof = result.get("noise_dof") or {}
+    nus = [dof.get(c) for c in ("omega2", "zeta")]
+    return math.inf if any(v is None for v in nus) else float(sum(nus))
+
+
+def detectable(rows, path):
+    """Singles detectable by each bound of :mod:`oracle` (>= 90 %) and named among
+    those of the last, as words."""
+    has = [r for r in rows if (r.get("oracle") or {}).get("lam") is not None
+           and r["truth"][0] not in NO_BOUND and "cause" in r["results"][path]]
+    if not has:
+        return "n/a (no oracle)"
+    lam = [r["oracle"]["lam"] for r in has]
+    np_ok = sum(detection_bound(x) >= 0.9 for x in lam)
+    known = sum(naming_power(x) >= 0.9 for x in lam)
+    est = [r for r, x in zip(has, lam) if naming_power(x, _judge_nu(r["results"][path])) >= 0.9]
+    ok = sum(right(r["truth"], r["results"][path]) for r in est)
+    return (f"of {len(has)} with a bound ({len(rows) - len(has)} without): any test "
+            f"{np_ok}, the judge's threshold with known noise {known}, with its noise "
+            f"dof {len(est)}, named {ok}/{len(est)}")
+
+
 def score(rows, gen, path):
     """The acceptance numbers of one generator and noise path; prints and returns them."""
     got = [(r.get("truth"), r["results"][path]) for r in rows]
@@ -220,8 +261,10 @@ def score(rows, gen, path):
           f"{alone} without a second cause, as bench_fe_hidden_effect scores)")
     print(f"  pairs, both named       {pct(p)}   (target >= 80 %)")
     print(f"  out of catalogue -> unexplained {pct(o)}   (target >= 80 %)")
+    singles = [r for r in rows if category(r.get("truth")) == "single"]
     print("  singles named by visibility (the generator's top-level change, noise units): "
-          + by_visibility([r for r in rows if category(r.get("truth")) == "single"], path))
+          + by_visibility(singles, path))
+    print("  singles detectable at >= 90 % power (oracle.py): " + detectable(singles, path))
     print(f"  none called otherwise   {none_other}/{n[1]}   (target <= 1 in 10)")
     print(f"  held-out 95 % interval coverage {cov_txt}   (target 90-98 %)")
     ok = (s[0] >= 0.9 * s[1] and p[0] >= 0.8 * p[1] and o[0] >= 0.8 * o[1]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from inverse.judge import (Candidate, at_bound, fit_test, noise_model, pooled_repeats,
+from inverse.judge import (T_CAUSE, Candidate, at_bound, fit_test, noise_model, pooled_repeats,
                            select, smooth_scatter)
 
 
@@ -260,3 +260,31 @@ def test_a_pair_is_named_only_when_its_second_cause_predicts_better():
     busy = Candidate(("a", "b"), 5, 5.0, 20, gain=2.0)
     sel = select([base, a, b, busy], noise)
     assert sel.cause in ("a", "b") and set([sel.cause] + sel.also) == {"a", "b"}
+
+
+@pytest.mark.parametrize("nu", [4.0, 12.0, math.inf])
+def test_naming_power_is_what_select_names(nu):
+    """An effect of size ``lam`` (drawn, 5-40) seen by a cause of 2 parameters whose form
+    is right, on 20 rows; the noise estimated on ``nu`` dof (planted chi-square). The
+    fraction :func:`select` names, by Monte Carlo, matches :func:`naming_power`; and it
+    never exceeds :func:`detection_bound` at the false-alarm rate the rule keeps."""
+    from dataclasses import replace
+
+    from inverse.judge import detection_bound, naming_power
+    rng = np.random.default_rng(int(nu) if math.isfinite(nu) else 7)
+    lam = rng.uniform(5.0, 40.0)
+    known = noise_model(np.arange(1.0, 11.0), {"omega2": np.full(10, 1e6)},
+                        {"omega2": np.full(10, 10.0)}, np.arange(10))
+    noise = replace(known, dof={"omega2": nu})
+    named, m = 0, 1500
+    for _ in range(m):
+        s2 = rng.chisquare(nu) / nu if math.isfinite(nu) else 1.0
+        drop = rng.noncentral_chisquare(2, lam) / s2
+        rest = rng.chisquare(15) / s2
+        base = Candidate((), 3, rest + drop, 20)
+        cause = Candidate(("a",), 5, rest, 20, gain=2.0)
+        named += select([base, cause], noise).cause == "a"
+    p = naming_power(lam, nu)
+    assert abs(named / m - p) < 4 * math.sqrt(p * (1 - p) / m) + 0.005, (named / m, p, lam)
+    alpha = stats.chi2.sf(2 * 2 + T_CAUSE, 2)           # the rule's false-alarm rate
+    assert p <= detection_bound(lam, alpha) + 1e-12

@@ -32,7 +32,8 @@ out-of-catalogue       damping that *falls* with force,            (nothing: ``u
 Effect sizes: log-uniform :data:`EFFECT_SIGMA` noise units at the top level. Noise:
 repeatability, Gaussian, drawn per series: relative ``omega2`` sd log-uniform
 :data:`SIGMA_OMEGA2` (frequency 0.005-0.05 %), relative ``zeta`` sd :data:`SIGMA_ZETA`
-(0.5-3 %), what real rigs repeat a level to (the earlier 4e-6 .. 1.5e-5 and 2e-4 ..
+(0.5-3 %): assumed, the range the project's brief gives for real rigs (about 0.05 % in
+frequency, a few % in damping), not measured here (the earlier 4e-6 .. 1.5e-5 and 2e-4 ..
 1e-3 lie below any rig's repeatability, where the fitted model's own form shows:
 docs/judge.md, "Limits"); half the series carry ``omega2_std`` /
 ``zeta_std`` columns holding only the identification's part (0.3 of the repeatability),

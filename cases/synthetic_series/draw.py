@@ -108,7 +108,8 @@ def _attempt(rng, causes, ooc, n, control, rep_on, n_rep):
         n_repeats=n_rep, force_column=plan.force_column, eps_m=plan.eps_m, eps_a=plan.eps_a,
         grid=plan.grid, n_lines=plan.n_lines, noise_free_omega2=free[:, 0].tolist(),
         noise_free_zeta=free[:, 1].tolist(),
-        run_level=[v + 1 for v, _, _ in plan.runs], run_time=[r.t for _, r, _ in plan.runs],
+        run_level=[v + 1 for v, _, _ in plan.runs], run_order_k=[r.k for _, r, _ in plan.runs],
+        run_time=[r.t for _, r, _ in plan.runs],
         x_peak=[s["x_peak"] for s in sims], fit_error=np.asarray(
             data.extra.get("x_fit_error", []), float).tolist())
     frfs = [dict(freq_hz=s["freq_hz"], frf=s["frf"], force=s["force"] if plan.force_column

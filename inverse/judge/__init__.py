@@ -18,6 +18,9 @@ e.g. the log response amplitude, the same way on an absolute scale):
   when the run order is not monotone in amplitude, a step between two runs or a drift
   with time is taken out where it lowers the leave-one-out error by
   :data:`~inverse.judge.noise.RUN_ORDER_GAIN` (a change with time is not repeatability).
+  That term is found over the rows, so a level run again later differs by it, and it
+  is taken out of the repeats and the level means alike; its parameters count against
+  the curve's degrees of freedom.
   The curve is not the model being judged: a misfit of that model
   cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
   is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.
@@ -52,12 +55,17 @@ explanation is the eligible candidate of
 largest weight; none eligible: ``unexplained``, with the closest miss and why it
 missed. ``ambiguous`` when another eligible candidate has at least
 :data:`W_AMBIGUOUS` of the named one's weight.
+
+Power (:mod:`inverse.judge.power`): for an effect of known size, the most any test
+could detect (:func:`detection_bound`) and what this rule names when the cause's form
+is right (:func:`naming_power`); ``benchmarks/bench_diagnose.py`` prints both.
 """
 from __future__ import annotations
 
 from inverse.judge.bounds import Bounded, at_bound
 from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
                                  pooled_repeats, smooth_scatter)
+from inverse.judge.power import detection_bound, naming_power
 from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
                                      Selection, drop_dof, drop_for_known_noise,
                                      effective_dof,
@@ -67,4 +75,5 @@ __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS"
            "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
            "fit_test", "effective_dof", "drop_dof", "known_noise_equivalent",
            "drop_for_known_noise",
-           "Candidate", "Selection", "select", "Bounded", "at_bound"]
+           "Candidate", "Selection", "select", "Bounded", "at_bound", "detection_bound",
+           "naming_power"]

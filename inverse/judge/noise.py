@@ -124,27 +124,44 @@ def _press(cols, y):
     return float(np.sum((e / np.maximum(1.0 - h, 1e-9)) ** 2)), float(e @ e)
 
 
-def _scatter(x, y, t=None):
-    """:func:`smooth_scatter` and the run-order term it took out (words or None)."""
+def _scatter(x, y, t=None, reserved: int = 0):
+    """The best curve's scatter with the run-order term it took out: (sd, dof, words or
+    None, the term's fitted values (n,), its parameter count). ``reserved``: dof already
+    spent on ``y`` (a run-order term taken out before)."""
     x, y = np.asarray(x, float), np.asarray(y, float)
-    n = x.size
+    n = x.size - reserved
+    none = np.zeros(x.size)
     if n < 3:
-        return 0.0, 0, None
+        return 0.0, 0, None, none, 0
     t = None if t is None else np.asarray(t, float)
     fits = []
     for k, cols in _curves(x):
         if n - k >= 1 and (f := _press(cols, y)) is not None:
             fits.append((f[0], f[1], k, cols))
     fits.sort(key=lambda f: f[0])
-    best = (*fits[0][:3], None)
+    best = (*fits[0][:3], None, none, 0)
     for _, _, k, cols in (fits[:_N_TRIED] if t is not None else []):
         for kt, extra, words in _run_order_terms(t):
             if n - k - kt < 1 or (f := _press(cols + extra, y)) is None:
                 continue
             if f[0] < min(RUN_ORDER_GAIN * fits[0][0], best[0]):
-                best = (f[0], f[1], k + kt, words)
-    _, rss, k, term = best
-    return math.sqrt(rss / (n - k)), n - k, term
+                a = np.column_stack(cols + extra)
+                coef = np.linalg.lstsq(a, y, rcond=None)[0]
+                best = (f[0], f[1], k + kt, words, a[:, len(cols):] @ coef[len(cols):], kt)
+    _, rss, k, term, part, kt = best
+    return math.sqrt(rss / (n - k)), n - k, term, part, kt
+
+
+def _without_run_order(x, y, relative, t):
+    """``y`` (n,) rows with the run-order term of :func:`_scatter` over the rows taken
+    out (in log for a ``relative`` channel), its words and parameter count."""
+    if t is None:
+        return y, None, 0
+    yl = np.log(y) if relative else y
+    _, _, words, part, kt = _scatter(x, yl, t)
+    if words is None:
+        return y, None, 0
+    return (np.exp(yl - part) if relative else yl - part), words, kt
 
 
 def smooth_scatter(x, y, t=None):
@@ -156,8 +173,10 @@ def smooth_scatter(x, y, t=None):
     counts as one). With a run order ``t`` (n,), a step between two runs or a drift
     with time (:func:`_run_order_terms`) is taken out when it lowers the leave-one-out
     error of one of the best curves: a change with run order is not repeatability.
-    (0, 0) for n < 3."""
-    return _scatter(x, y, t)[:2]
+    The curve is then chosen again on ``y`` without that term, and its ``k_t``
+    parameters count: ``sigma^2 = RSS / (n - k - k_t)``. (0, 0) for n < 3."""
+    y, _, kt = _without_run_order(x, np.asarray(y, float), False, t)
+    return _scatter(x, y, reserved=kt)[:2]
 
 
 def pooled_repeats(groups, y, relative: bool = True):
@@ -207,17 +226,21 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
                        for g in labels])
         dt = np.diff(tm[np.argsort([np.mean(x[level_ids == g]) for g in labels])])
         tm = None if np.all(dt > 0) or np.all(dt < 0) else tm
+    rows_t = None if tm is None else np.asarray(run_order, float)
     for c, y in values.items():
         y = np.asarray(y, float)
         rel = c in _RELATIVE
         scale = np.abs(y) if rel else np.ones_like(y)
         idn = np.zeros_like(y) if stds.get(c) is None else np.asarray(stds[c], float)
+        # a step or drift with run order is found on the rows (a repeat run later
+        # differs by it) and taken out of the repeats and of the level means alike
+        y, stepped, kt = _without_run_order(x, y, rel, rows_t)
         s_r, nu_r = pooled_repeats(level_ids, y, relative=rel)
         n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
         means = np.array([np.mean(y[level_ids == g]) for g in labels])
         xm = np.array([np.mean(x[level_ids == g]) for g in labels])
         ym = np.log(means) if rel else means
-        s_s, nu_s, stepped = _scatter(xm, ym, tm)
+        s_s, nu_s = _scatter(xm, ym, reserved=kt)[:2]
         curve_words = f"scatter about a smooth curve ({nu_s} dof)" + (
             f" with {stepped} in run order taken out" if stepped else "")
         if nu_r >= MIN_REPEAT_DOF:
