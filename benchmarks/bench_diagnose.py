@@ -47,7 +47,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
-                                    without_stds)
+                                    truth_of, without_stds)
 from inverse.diagnose import diagnose  # noqa: E402
 from oracle import NO_BOUND, detection_bound, dev_oracle, naming_power, own_oracle  # noqa: E402
 from runs.executor import ExecutorSpec, run_sweep  # noqa: E402
@@ -116,6 +116,8 @@ def run_case(job):
     gen, label, seed, case_dir = job
     t0 = time.perf_counter()
     out = {"gen": gen, "label": label, "seed": seed, "note": ""}
+    if gen == "own":                               # known from the label, drawn or not
+        out["truth"] = list(truth_of(label)) or ["none"]
     try:
         if gen == "own":
             s = generate_series(label, seed)
