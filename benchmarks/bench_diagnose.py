@@ -234,9 +234,11 @@ def detectable(rows, path):
     known = sum(naming_power(x) >= 0.9 for x in lam)
     est = [r for r, x in zip(has, lam) if naming_power(x, _judge_nu(r["results"][path])) >= 0.9]
     ok = sum(right(r["truth"], r["results"][path]) for r in est)
+    mean = 100 * np.mean([detection_bound(x) for x in lam])
     return (f"of {len(has)} with a bound ({len(rows) - len(has)} without): any test "
             f"{np_ok}, the judge's threshold with known noise {known}, with its noise "
-            f"dof {len(est)}, named {ok}/{len(est)}")
+            f"dof {len(est)}, named {ok}/{len(est)}; the most any test could name on "
+            f"average {mean:.0f} %")
 
 
 def score(rows, gen, path):
