@@ -37,7 +37,8 @@ def agree_on_modes(results, refit):
     with more modes than the most common count (the smaller on a tie; typically a level
     with little signal, or a force-controlled FRF that a nonlinear joint distorts) is
     identified again with that count. Levels with fewer modes are kept (a mode may
-    leave the band).
+    leave the band), and so is a level whose identification with the new count fails
+    (its note says why).
 
     Parameters
     ----------
@@ -54,10 +55,22 @@ def agree_on_modes(results, refit):
     def found(res):
         return ", ".join(f"{m.frequency_hz:.6g}" for m in res.modes)
 
+    def again(k, n):
+        """Level k identified with n modes, or None (with a note) when that fails."""
+        try:
+            return refit(k, n)
+        except ValueError as exc:
+            notes[k].append(f"identified again with {n} mode(s): failed ({exc}); the "
+                            f"automatic selection is kept")
+            return None
+
     for k in range(len(results)):
         while len(results[k].modes) > 1 and one_resonance(results[k].modes):
             was = found(results[k])
-            results[k] = refit(k, len(results[k].modes) - 1)
+            res = again(k, len(results[k].modes) - 1)
+            if res is None:
+                break
+            results[k] = res
             notes[k].append(f"two poles within one half-power width ({was} Hz) are one "
                             f"resonance: identified with {len(results[k].modes)}")
     counts = np.array([len(r.modes) for r in results])
@@ -67,7 +80,10 @@ def agree_on_modes(results, refit):
         agree = int(np.sum(counts == common))
         for k in np.flatnonzero(counts > common):
             was = found(results[k])
-            results[k] = refit(int(k), common)
+            res = again(int(k), common)
+            if res is None:
+                continue
+            results[k] = res
             notes[k].append(f"automatic selection found {counts[k]} modes ({was} Hz); "
                             f"identified with {common}, as at {agree} of {len(results)} levels")
     return results, notes

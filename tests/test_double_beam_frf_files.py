@@ -72,3 +72,27 @@ def test_identify_command_on_the_frf_files_agrees_with_the_study(written, capsys
     np.testing.assert_allclose(cli.zeta[:8], sim.zeta[:8], rtol=1.5e-3)
     # the damping growth between levels survives: zeta increases level by level
     assert np.all(np.diff(cli.zeta) > 0)
+
+
+def test_a_level_that_cannot_be_identified_again_keeps_its_modes():
+    """Levels of 1, 1 and 2 well-separated modes: the third is identified again with
+    one; when that identification fails (as a gen_dev case's level did: "2 mode(s)
+    requested, 1 left after the refinement") the level keeps its own modes and its note
+    says so, instead of the whole series failing."""
+    from types import SimpleNamespace
+
+    def mode(f):
+        return SimpleNamespace(frequency_hz=f, zeta=0.001, shape=np.array([1.0]))
+
+    levels = [SimpleNamespace(modes=[mode(100.0)]), SimpleNamespace(modes=[mode(100.1)]),
+              SimpleNamespace(modes=[mode(100.2), mode(140.0)])]
+
+    def refit(k, n):
+        raise ValueError(f"{n} mode(s) requested, 0 left after the refinement")
+
+    results, notes = agree_on_modes(levels, refit)
+    assert results[2] is levels[2] and len(results[2].modes) == 2
+    assert notes[:2] == [[], []] and "failed" in notes[2][0] and "kept" in notes[2][0]
+    ok = SimpleNamespace(modes=[mode(100.2)])
+    results, notes = agree_on_modes(levels, lambda k, n: ok)
+    assert results[2] is ok and "identified with 1" in notes[2][0]
