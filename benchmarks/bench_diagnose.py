@@ -216,10 +216,12 @@ def by_visibility(rows, path):
 
 
 def _judge_nu(result):
-    """The noise dof the judge had on omega2 and zeta, summed (inf when known)."""
+    """The noise dof the judge had on omega2 and zeta: the estimated channels' dof
+    summed (a generous count; a known channel, dof None, adds none), inf when both are
+    known."""
     dof = result.get("noise_dof") or {}
-    nus = [dof.get(c) for c in ("omega2", "zeta")]
-    return math.inf if any(v is None for v in nus) else float(sum(nus))
+    nus = [dof.get(c) for c in ("omega2", "zeta") if dof.get(c) is not None]
+    return float(sum(nus)) if nus else math.inf
 
 
 def detectable(rows, path):
