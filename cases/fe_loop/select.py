@@ -171,7 +171,8 @@ def _inactive(ext, f) -> bool:
 
 def fe_select(data, mask, fe: FELevels, causes=None,
               progress=None) -> dict:
-    """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring).
+    """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring);
+    ``causes``: the extensions to try (None: every one; empty: the base model alone).
 
     Returns ``fe``, ``noise`` (update form), ``judge_noise``, ``base`` (FitCandidate),
     ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
@@ -199,7 +200,7 @@ def _select(data, mask, fe, causes, say) -> dict:
     # chi from the base optimum and from -0.5 (an extension can move chi far: a slip
     # onset or a hardening bends the top levels, which chi then need not do)
     chi_starts = sorted({bfit.values["chi"], -0.5})
-    for cause in (causes or EXTENSIONS):
+    for cause in (EXTENSIONS if causes is None else causes):
         if cause in skip:
             continue
         say(cause)
