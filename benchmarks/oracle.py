@@ -2,9 +2,10 @@
 
 For one synthetic series with one hidden effect, the generator's noise-free identified
 table is taken twice, with the effect (W) and without it (C), both without the per-run
-repeatability offsets. The diagnosis' base model (micro-slip Iwan over the
-abscissa of eq. (1) of ``inverse/diagnosis/models.py``) is fitted to C; its fitted values B_C plus the effect's change W - C form
-the series the effect alone makes from a base-model series. Fitted again by the base
+repeatability offsets. The diagnosis' base model (micro-slip Iwan over the abscissa
+of eq. (1) of ``inverse/diagnosis/models.py``) is fitted to C; its fitted values B_C
+plus the effect's change W - C form the series the effect alone makes from a
+base-model series. Fitted again by the base
 model in the true noise units of each level (identification sd and repeatability, as
 the generator drew them), its minimum chi2
 
