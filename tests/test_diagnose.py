@@ -280,6 +280,21 @@ def test_shipped_paper_data_json_names_noise_bounds_and_failures():
             assert bounds[name]["interval_kind"].startswith("profile")
     top = [p["level"] for p in r["held_out_predictions"]["levels"]]
     assert top == [8, 9, 10]
+    worse = r["cause"] not in ("none", "unexplained") and (r["gain_held_out"] or 2.0) < 1
+    assert ("Fitted without the top" in r["summary"]) == worse
+
+
+def test_a_named_model_that_extrapolates_worse_than_the_base_says_so():
+    """The summary warns when the named model, fitted without the top levels, predicts
+    them worse than the base model (a gen_dev case named a pair at a top-level gain of
+    0.005 while its leave-one-out gain was 1.95)."""
+    from inverse.diagnosis.text import extrapolation_note
+
+    note = extrapolation_note("geometric-hardening+macro-slip", 0.00507, 4)
+    assert "top 4 levels" in note and "0.00507" in note and "geometric-hardening" in note
+    for cause, gain in (("macro-slip", 1.2), ("macro-slip", None), ("none", 0.3),
+                        ("unexplained", 0.3)):
+        assert extrapolation_note(cause, gain, 3) == ""
 
 
 @pytest.mark.parametrize("content, needle", [

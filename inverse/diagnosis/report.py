@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from inverse.diagnosis.separability import separating_measurement
-from inverse.diagnosis.text import describe
+from inverse.diagnosis.text import describe, extrapolation_note
 from inverse.judge import P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Bounded, at_bound
 
 __all__ = ["assemble", "ERROR_MEASURE"]
@@ -155,6 +155,8 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
                        contradictions, best, rivals, np.unique(obs.levels).size,
                        separability["inseparable"], unfit)
     summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
+    summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
+                                  n_top)
     if on_bound:
         summary += (f" On a bound in the {best} fit: {', '.join(on_bound)} (not treated as "
                     f"free: the prediction intervals integrate the nonlinear parameters "

@@ -8,7 +8,7 @@ import numpy as np
 from inverse.contradictions import Contradiction, threshold
 from inverse.diagnosis.causes import CATALOGUE
 
-__all__ = ["own_contradictions", "chi_at_bound", "describe"]
+__all__ = ["own_contradictions", "chi_at_bound", "describe", "extrapolation_note"]
 
 def own_contradictions(d, base_params: dict, base_zeta, noise) -> list:
     """The diagnosis's own statements: the base fit collapsing to no joint while the
@@ -100,3 +100,15 @@ def describe(cause: str, also: list, params: dict, gain, test: dict, contradicti
         pairs = "; ".join(f"{p['causes'][0]} from {p['causes'][1]}" for p in inseparable)
         text += f" With {n_levels} levels this test cannot separate {pairs}."
     return text
+
+
+def extrapolation_note(cause: str, gain_held_out, n_top: int) -> str:
+    """A sentence when the named model, fitted without the top ``n_top`` levels,
+    predicts them worse than the base model (``gain_held_out`` < 1): its form is then
+    not confirmed beyond the levels it was fitted to. Empty otherwise."""
+    if cause in ("none", "unexplained") or gain_held_out is None or gain_held_out >= 1.0:
+        return ""
+    return (f" Fitted without the top {n_top} levels, the {cause} model predicts them "
+            f"worse than the base model (gain {gain_held_out:.3g}): its form is not "
+            f"confirmed beyond the levels it was fitted to; test above the top level "
+            f"before relying on an extrapolation.")
