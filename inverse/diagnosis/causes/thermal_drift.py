@@ -2,9 +2,12 @@
 with amplitude; the damping is unaffected.
 
 One-mode model: ``omega2 += d f(t_v)``, ``t_v`` the run order scaled to [0, 1],
-``f = (1 - e^(-b t))/(1 - e^(-b))``: an exponential approach to a new temperature
-(Newton's law of cooling), linear at ``b = 0``, accelerating for ``b < 0``. Not testable
-on a monotone run order (time and amplitude are then one variable).
+``f = 0`` before the onset ``t_0`` and ``(1 - e^(-b u))/(1 - e^(-b))`` after it,
+``u = (t - t_0)/(1 - t_0)``: an exponential approach to a new temperature (Newton's law
+of cooling) from the start of the test or from a change of the surroundings during it
+(``t_0`` > 0; a large ``b`` makes it a step), linear at ``b = 0``, accelerating for
+``b < 0``. Not testable on a monotone run order (time and amplitude are then one
+variable).
 """
 from __future__ import annotations
 
@@ -16,7 +19,8 @@ WORDS = ("the natural frequency drifts with the order in which the levels were r
          "with amplitude; the damping is unaffected")
 ADVICE = ("repeat the lowest level at the end of the test (or shuffle the run order): "
           "drift follows time, not amplitude")
-NONLINEAR = [("b_drift", -4.0, 8.0, np.array([-2.0, 0.0, 2.0, 5.0]))]
+NONLINEAR = [("b_drift", -4.0, 40.0, np.array([-2.0, 0.0, 2.0, 5.0, 20.0])),
+             ("t_onset", 0.0, 0.9, np.array([0.0, 0.3, 0.6]))]
 LINEAR = ["d"]
 NONNEG = ()
 EFFECT = None
@@ -31,9 +35,16 @@ def drift_shape(t, b):
     return np.where(small, t * (1 + 0.5 * b * (1 - t)), np.expm1(-bb * t) / np.expm1(-bb))
 
 
+def onset_shape(t, b, t0):
+    """:func:`drift_shape` started at ``t0`` (0 before it), broadcast."""
+    u = np.clip((t - t0) / (1.0 - t0), 0.0, 1.0)
+    return drift_shape(u, b)
+
+
 def columns(obs, col, log_s, p, w2):
     """Column of ``d`` (module doc)."""
-    return [drift_shape(obs.t_run[None, :], col["b_drift"])], [np.zeros_like(log_s)]
+    f = onset_shape(obs.t_run[None, :], col["b_drift"], col["t_onset"])
+    return [f], [np.zeros_like(log_s)]
 
 
 def parameters(lin, nl, obs, log_s, chi):
@@ -41,7 +52,7 @@ def parameters(lin, nl, obs, log_s, chi):
     the shape ``b_drift``."""
     span = obs.run_span
     return {"d_total": lin["d"], "d": lin["d"] / span if span > 0 else 0.0,
-            "b_drift": nl["b_drift"]}
+            "b_drift": nl["b_drift"], "t_onset": nl["t_onset"]}
 
 
 def signature(obs, base):
