@@ -29,9 +29,12 @@ geometric-    ``power-spring``: k |x|^a sgn x, a in        omega2 += h s^n C(s_c
 hardening     [1.5, 2.2] or [5.5, 7] (frequency exponent   n = nu + 1.5 w, nu in [0, 3]
               0.5-1.2 or 4.5-6); ``hertz-stop``: one-      (1.5-4.5), linear contact past
               sided (x - g)^1.5 past g = 0.1-0.6 X_top     s_c in [0, 0.9]
-thermal-      ``temperature-step`` at a random test        omega2 += d (1 - e^(-b t)) /
-drift         time; ``room-cycle``: ramp + sine of the     (1 - e^(-b)), t the run order
-              clock time (run durations 0.7-1.3)           scaled, b in [-4, 8]
+thermal-      ``temperature-step`` at a random test        omega2 += d (1 - e^(-b u)) /
+drift         time; ``room-cycle``: ramp + sine of the     (1 - e^(-b)), u = (t - t0)/(1 - t0)
+              clock time (run durations 0.7-1.3)           after the onset t0 in [0, 0.9],
+                                                           0 before, b in [-4, 40]: at large
+                                                           b a step, the ``temperature-step``
+                                                           form (shared since session 8)
 nonprop.-     ``shaker-impedance``: voltage drive, coil    Box-Cox on log s:
 amplitude     R-L, back-EMF Bl^2/R 0.5-4 x the mode's      gamma (s^kappa - 1)/kappa,
               damping, armature mass, suspension;          gamma in [-0.95, 0.6],
