@@ -49,6 +49,7 @@ import numpy as np  # noqa: E402
 from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
                                     truth_of, without_stds)
 from inverse.diagnose import diagnose  # noqa: E402
+from inverse.judge.selection import shared_drop_dof  # noqa: E402
 from oracle import NO_BOUND, detection_bound, dev_oracle, naming_power, own_oracle  # noqa: E402
 from runs.executor import ExecutorSpec, run_sweep  # noqa: E402
 
@@ -98,15 +99,18 @@ def _dev_data(case_dir):
 
 
 def _oracle(gen, data, truth):
-    """``lam`` of :mod:`oracle` (None with the reason in ``oracle_error``)."""
+    """``lam`` of :mod:`oracle` and its parts per channel (``lam_by_channel``); None
+    with the reason in ``error``."""
+    def both(by):
+        return {"lam": None if by is None else sum(by.values()), "lam_by_channel": by}
     try:
         if gen == "own":
-            return {"lam": own_oracle(data, truth)}
+            return both(own_oracle(data, truth))
         t = json.loads((truth.parent / "truth_dev.json").read_text())["cases"][truth.name]
         first = {(v + 1, int(k)) for v, k in enumerate(t["run_order"])}
         keep = [i for i, (lv, ro) in enumerate(zip(data.level, data.run_order))
                 if (int(lv), int(ro)) in first]
-        return {"lam": dev_oracle(data.take(keep), t, DEV / "gen_dev.py")}
+        return both(dev_oracle(data.take(keep), t, DEV / "gen_dev.py"))
     except Exception as exc:                       # noqa: BLE001 (counted, printed)
         return {"lam": None, "error": f"{type(exc).__name__}: {str(exc)[:80]}"}
 
@@ -215,13 +219,13 @@ def by_visibility(rows, path):
     return ", ".join(parts)
 
 
-def _judge_nu(result):
-    """The noise dof the judge had on omega2 and zeta: the estimated channels' dof
-    summed (a generous count; a known channel, dof None, adds none), inf when both are
-    known."""
-    dof = result.get("noise_dof") or {}
-    nus = [dof.get(c) for c in ("omega2", "zeta") if dof.get(c) is not None]
-    return float(sum(nus)) if nus else math.inf
+def _judge_nu(row, path):
+    """The noise dof the judge had behind the effect's drop: its channels' dof weighted
+    by the effect's share of ``lam`` in each (as the judge weights a drop), inf when
+    both are known."""
+    dof = row["results"][path].get("noise_dof") or {}
+    by = row["oracle"].get("lam_by_channel") or {}
+    return shared_drop_dof({c: by[c] for c in ("omega2", "zeta") if c in by}, dof)
 
 
 def detectable(rows, path):
@@ -234,7 +238,7 @@ def detectable(rows, path):
     lam = [r["oracle"]["lam"] for r in has]
     np_ok = sum(detection_bound(x) >= 0.9 for x in lam)
     known = sum(naming_power(x) >= 0.9 for x in lam)
-    est = [r for r, x in zip(has, lam) if naming_power(x, _judge_nu(r["results"][path])) >= 0.9]
+    est = [r for r, x in zip(has, lam) if naming_power(x, _judge_nu(r, path)) >= 0.9]
     ok = sum(right(r["truth"], r["results"][path]) for r in est)
     mean = 100 * np.mean([detection_bound(x) for x in lam])
     return (f"of {len(has)} with a bound ({len(rows) - len(has)} without): any test "

@@ -25,7 +25,6 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -292,8 +291,12 @@ def _validated_or_refused(argv):
     return "refused"
 
 
+#: Root of the output folders the commands are given; removed when the session ends.
+_OUT_ROOT = tempfile.TemporaryDirectory(prefix="iwanfe-fuzz-out-")
+
+
 def _tmp_out():
-    return tempfile.mkdtemp(prefix="iwanfe-fuzz-out-")
+    return tempfile.mkdtemp(dir=_OUT_ROOT.name)
 
 
 @settings(FAST, max_examples=25)

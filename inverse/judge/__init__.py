@@ -20,7 +20,8 @@ e.g. the log response amplitude, the same way on an absolute scale):
   :data:`~inverse.judge.noise.RUN_ORDER_GAIN` (a change with time is not repeatability).
   That term is found over the rows, so a level run again later differs by it, and it
   is taken out of the repeats and the level means alike; its parameters count against
-  the curve's degrees of freedom.
+  the curve's degrees of freedom, and against the repeats' when they serve alone and
+  the term differs between runs of one level.
   The curve is not the model being judged: a misfit of that model
   cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
   is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.

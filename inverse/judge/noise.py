@@ -234,8 +234,12 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         idn = np.zeros_like(y) if stds.get(c) is None else np.asarray(stds[c], float)
         # a step or drift with run order is found on the rows (a repeat run later
         # differs by it) and taken out of the repeats and of the level means alike
+        y0 = y
         y, stepped, kt = _without_run_order(x, y, rel, rows_t)
         s_r, nu_r = pooled_repeats(level_ids, y, relative=rel)
+        # a term that differs between a level's repeats was fitted on them too
+        shift = np.log(y / y0) if rel else y - y0
+        within = kt and any(np.ptp(shift[level_ids == g]) > 1e-12 for g in labels)
         n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
         means = np.array([np.mean(y[level_ids == g]) for g in labels])
         xm = np.array([np.mean(x[level_ids == g]) for g in labels])
@@ -244,8 +248,10 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         curve_words = f"scatter about a smooth curve ({nu_s} dof)" + (
             f" with {stepped} in run order taken out" if stepped else "")
         if nu_r >= MIN_REPEAT_DOF:
-            s2, nu = s_r**2, nu_r
-            words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof)", "repeats"
+            nu = nu_r - kt if within else nu_r
+            s2 = s_r**2 * nu_r / nu
+            words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu} dof)" + (
+                f" with {stepped} in run order taken out" if within else ""), "repeats"
         elif nu_r > 0:
             nu = nu_r + nu_s
             s2 = (nu_r * s_r**2 + nu_s * s_s**2) / nu

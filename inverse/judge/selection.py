@@ -11,6 +11,7 @@ from scipy import optimize, special, stats
 from inverse.judge.noise import NoiseModel
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "FitTest", "fit_test", "effective_dof",
+           "shared_drop_dof",
            "known_noise_equivalent", "drop_for_known_noise", "Candidate", "Selection",
            "select"]
 
@@ -66,11 +67,18 @@ def drop_dof(base: "Candidate", cand: "Candidate", noise: NoiseModel) -> float:
         return effective_dof(noise)
     d = {c: max(0.0, base.chi2_by_channel[c] - cand.chi2_by_channel.get(c, 0.0))
          for c in base.chi2_by_channel}
-    total = sum(d.values())
-    if not 0.0 < total < math.inf:
+    if not 0.0 < sum(d.values()) < math.inf:
         return effective_dof(noise)
-    den = sum(v**2 / noise.dof[c] for c, v in d.items() if not math.isinf(noise.dof[c]))
-    return math.inf if den == 0.0 else total**2 / den
+    return shared_drop_dof(d, noise.dof)
+
+
+def shared_drop_dof(drops: dict, dof: dict) -> float:
+    """Satterthwaite degrees of freedom of a chi2 drop shared over channels,
+    ``(sum_c d_c)^2 / sum_c (d_c^2 / nu_c)`` (``drops`` {channel: d_c >= 0}, ``dof``
+    {channel: nu_c}; inf or None: known, adds nothing)."""
+    den = sum(v**2 / dof[c] for c, v in drops.items()
+              if dof.get(c) is not None and not math.isinf(dof[c]))
+    return math.inf if den == 0.0 else sum(drops.values()) ** 2 / den
 
 
 def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitTest:
