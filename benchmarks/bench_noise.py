@@ -11,6 +11,13 @@
     ascending or shuffled), without and with repeats (the lowest level again at the
     end, a middle one after it).
 
+Both parts share forms with the judge, so they measure self-consistency, not power:
+(a)'s power laws are among the curve families of the noise model, and (b)'s series are
+the diagnosis' own base model (exact four-parameter Iwan describing function), with
+the repeatability drawn in the range the brief gives. The false-alarm rate on data
+made apart is that of ``benchmarks/bench_diagnose.py`` (``none`` series of a Jenkins
+bank without a Dirac share, and gen_dev's).
+
 Usage::
 
     python benchmarks/bench_noise.py [--series 1000] [--diagnoses 20] [--seed 19]

@@ -48,8 +48,9 @@ def columns(obs, col, log_s, p, w2):
 
 
 def parameters(lin, nl, obs, log_s, chi):
-    """``d_total`` (omega2 drift over the run, rad^2/s^2), ``d`` per run (average) and
-    the shape ``b_drift``."""
+    """``d_total`` (omega2 drift over the run, rad^2/s^2), ``d`` per run (average), the
+    shape ``b_drift`` and the onset ``t_onset`` (run order scaled to [0, 1]); all
+    fitted."""
     span = obs.run_span
     return {"d_total": lin["d"], "d": lin["d"] / span if span > 0 else 0.0,
             "b_drift": nl["b_drift"], "t_onset": nl["t_onset"]}
