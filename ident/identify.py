@@ -39,10 +39,12 @@ up to 5 % on the systems above, against 0.01 % / 2 % required.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.signal import find_peaks
+from threadpoolctl import threadpool_limits
 
 from ident.lscf import (LINK_MAC, STABLE_FREQ, ZETA_MAX, StabilizationDiagram,
                         chain_representatives, lscf_poles, stabilization)
@@ -126,6 +128,19 @@ def _default_max_order(n_lines, n_peaks):
     return int(min(max(24, 4 * n_peaks + 16), 60, max(4, n_lines // 4)))
 
 
+def _one_blas_thread(func):
+    """Run ``func`` with BLAS on one thread. The refinement of a strongly distorted FRF
+    (force control deep in macro-slip) has nearly equal optima, and the summation order
+    of a multi-threaded BLAS picks among them (docs/judge.md, session 9): on one thread
+    the identification gives the same numbers in a script, the CLI and a worker."""
+    @functools.wraps(func)
+    def one_thread(*args, **kwargs):
+        with threadpool_limits(limits=1, user_api="blas"):
+            return func(*args, **kwargs)
+    return one_thread
+
+
+@_one_blas_thread
 def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
              max_order=None, weighting="auto", pseudo_modes=True) -> Identification:
     """Identify the modes in ``band`` from FRFs of one reference.
