@@ -1,10 +1,10 @@
 """The paper's 10-DOF study (cases.lumped10) and ``iwanfe reproduce lumped``."""
 import csv
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SHARED_PAPER
 import scipy.linalg as la
 
 from cases.lumped10.improved_fit import fit_improved
@@ -15,7 +15,7 @@ from fe.modal import modal_inverse_receptance, normal_modes
 from joints.describing import describing_function
 from joints.iwan import IwanParameters
 
-PAPER = Path("/work/shared/data/paper")
+PAPER = SHARED_PAPER
 
 
 def test_topology_symmetric_modes_are_single_chain_modes():

@@ -1,10 +1,10 @@
 """The shipped double-beam data file and the consistency checks of the paper tables."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SHARED_PAPER
 
 from ident.measured import read_measured
 from cases.paper_data import (
@@ -18,7 +18,7 @@ from cases.paper_data import (
     read_table,
 )
 
-SHARED = Path("/work/shared/data/paper")
+SHARED = SHARED_PAPER
 NAMES = {"table3": "table3_double_beam_delta_omega2.csv",
          "table4": "table4_double_beam_omega2.csv",
          "table5": "table5_double_beam_delta_zeta_percent.csv",
