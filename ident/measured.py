@@ -128,6 +128,9 @@ def _check_header(header: list[str], source: str) -> None:
             _fail(source, 1, name, "duplicate column name")
         seen.add(name)
         if name not in KNOWN_COLUMNS and not name.startswith("x_"):
+            sep = next((c for c in ";\t|" if c in name), None)
+            if sep:
+                _fail(source, 1, name, f"columns are separated by commas, not {sep!r}")
             _fail(source, 1, name, "unknown column (known: " + ", ".join(KNOWN_COLUMNS)
                   + "; free annotations must start with 'x_')")
     for name in REQUIRED_COLUMNS:
@@ -246,7 +249,7 @@ def read_measured(path) -> MeasuredData:
         if std is not None:
             first_bad(std <= 0, name, lambda i: f"{name} must be > 0, got {std[i]:g}")
     first_bad(~np.isin(control, CONTROLS), "control",
-              lambda i: f"control must be force or response, got {control[i]!r}")
+              lambda i: f"control must be force or response, got '{control[i]}'")
     if response is None:
         first_bad(control == "response", "response_amplitude",
                   lambda i: "control = response needs a response_amplitude column (the "

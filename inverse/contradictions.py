@@ -161,12 +161,18 @@ def _tie(d, sig: NoiseLevels) -> Contradiction | None:
     if margin <= threshold(min(sig.dof_omega2, sig.dof_zeta)):
         return None
     f_a = math.sqrt(w[a]) / (2 * math.pi)
+
+    def drop(dw):
+        """The frequency drop of an omega^2 loss ``dw`` from level a, in words."""
+        if dw >= w[a]:
+            return "more than the whole omega^2"
+        return f"a frequency drop of {100 * (1 - math.sqrt(1 - dw / w[a])):.3g} %"
+
     text = (f"from level {d.level[a]} to {d.level[b]} the damping ratio grows "
             f"{100 * z[a]:.4g} % -> {100 * z[b]:.4g} % (joint modal damping +{growth_c:.4g} "
             f"rad^2/s^2), so a micro-slip Iwan joint must lower omega^2 by at least 3 pi/4 x "
-            f"that = {least:.4g} rad^2/s^2 (a frequency drop of "
-            f"{100 * (1 - math.sqrt(1 - least / w[a])):.3g} % at {f_a:.6g} Hz); the data "
-            f"lose {loss:.4g} rad^2/s^2 ({100 * (1 - math.sqrt(1 - loss / w[a])):.3g} %), "
+            f"that = {least:.4g} rad^2/s^2 ({drop(least)} at {f_a:.6g} Hz); the data "
+            f"lose {loss:.4g} rad^2/s^2 ({drop(loss)[len('a frequency drop of '):]}), "
             f"{least / max(loss, 1e-300):.3g}x less; only slip past phi_max (macro-slip) or "
             f"damping from elsewhere can do that"
             + _beyond(margin, min(sig.dof_omega2, sig.dof_zeta)))

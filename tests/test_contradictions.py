@@ -63,6 +63,22 @@ def test_extra_damping_breaks_the_micro_slip_tie(seed):
     assert c.numbers["omega2_loss"] == pytest.approx(d.omega2[0] - d.omega2[-1])
 
 
+def test_a_damping_growth_that_would_need_more_than_all_of_omega2_is_stated_not_a_crash():
+    """zeta 20 % -> 45 % (a percent column read as fractions): the least loss 3 pi/4 x the
+    joint damping growth exceeds omega^2 itself, which has no frequency drop to print."""
+    n = 4
+    omega2 = np.array([1e6, 0.99e6, 0.98e6, 0.97e6])
+    d = MeasuredData(level=np.arange(1, n + 1), excitation=2.0 ** np.arange(n), omega2=omega2,
+                     zeta=np.array([0.20, 0.25, 0.32, 0.45]), mode=None, run_order=None,
+                     response_amplitude=None, omega2_std=1e-4 * omega2,
+                     zeta_std=np.full(n, 1e-3), control=np.full(n, "force"))
+    (c,) = [c for c in iwan_contradictions(d) if c.kind == "tie-violated"]
+    growth = 2 * (0.97e6 * 0.45 - 1e6 * 0.20)
+    assert c.numbers["least_loss_micro_slip"] == pytest.approx(MIN_TIE * growth)
+    assert c.numbers["least_loss_micro_slip"] > omega2[0]
+    assert "more than the whole omega^2" in c.statement and "(1.51 %)" in c.statement
+
+
 def test_response_controlled_rise_with_fourfold_damping_is_stated_with_both_numbers():
     """Issue 14: frequency +0.3 % while damping grows 4x, response-controlled."""
     rng = np.random.default_rng(7)

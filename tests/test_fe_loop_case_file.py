@@ -215,3 +215,21 @@ def test_measured_frf_files_named_by_a_pattern_are_identified(planted, tmp_path,
     assert resolve_case(str(case_file)).measured_data() == path         # cached
     c = _json(capsys, "update", "--case", case_file)["parameters"]["chi"]
     assert abs(c["value"] - planted[1]) < 0.05
+
+
+@pytest.mark.parametrize("n_levels, fitted", [(9, [1, 2, 3, 4, 5, 6]), (7, [1, 2, 3, 4, 5]),
+                                              (5, [1, 2, 3, 4, 5])])
+def test_default_fit_levels_hold_out_the_top_three_and_count_a_repeat_once(
+        tmp_path, n_levels, fitted):
+    """All but the top three levels, at least 5 fitted (cases/casefile/fe_loop.py); a
+    repeated level (a legal row, measured-data spec) is one level, not two."""
+    from cases.casefile.fe_loop import _defaults
+    from cases.casefile.schema import read_case_file
+
+    rows = [(v, v) for v in range(1, n_levels + 1)] + [(2, n_levels + 1)]   # level 2 again
+    lines = ["mode,level,excitation,omega2,zeta,run_order"] + [
+        f"2,{v},{0.1 * v},{1e6 * (1 - 1e-3 * v)},{0.01 + 1e-3 * v},{k}" for v, k in rows]
+    csv = tmp_path / "levels.csv"
+    csv.write_text("\n".join(lines) + "\n")
+    got = _defaults(read_case_file(LAP), csv)["fit_levels"]
+    assert got == ",".join(map(str, fitted))

@@ -104,6 +104,14 @@ def test_missing_required_column(tmp_path, missing):
     assert error_of(p).startswith(f"{p}:1:{missing}: missing required column")
 
 
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_a_file_separated_by_semicolons_or_tabs_is_told_so(tmp_path, sep):
+    lines = [r.replace(",", sep) for r in [HEADER] + ROWS]
+    p = write(tmp_path, "\n".join(lines) + "\n")
+    assert error_of(p) == (f"{p}:1:{lines[0]}: columns are separated by commas, "
+                           f"not {sep!r}")
+
+
 @pytest.mark.parametrize("bad,column,text", [
     ("abc", "omega2", "not a number"),
     ("nan", "omega2", "not a finite number"),

@@ -104,8 +104,8 @@ def _defaults(cf, data_path=None, mode=None) -> dict:
                              f"table's mode labels {labels}: give --mode")
     elif int(mode) not in labels:
         raise InputError(f"{path}: no mode {mode} in the table (labels {labels})")
-    levels = sorted(int(v) for v in table.for_mode(mode).level)
-    fit = levels[:-3] if len(levels) >= 8 else levels
+    levels = sorted({int(v) for v in table.for_mode(mode).level})   # a repeat is one level
+    fit = levels[:max(5, len(levels) - 3)]
     return {"data_path": str(path), "mode_label": int(mode),
             "fit_levels": ",".join(map(str, fit))}
 

@@ -133,8 +133,10 @@ def format_text(r: dict, source: str) -> str:
                  f"standard deviations, p = {_g(ft['p_value'], '.2g')} ({ft['test']})")
     lines.append(f"parameters ({r['parameters']['model']}; fitted to this series):")
     lines += [f"  {k:24s} {_fmt(v)}" for k, v in r["parameters"].items() if k != "model"]
-    lines.append("candidates (weight: Akaike weight with the cost per cause; dAIC: AIC of "
-                 "none minus the candidate's; p: fit test):")
+    lines.append("candidates (weight: Akaike weight with the cost per cause, the causes' "
+                 "drops taken at their known-noise equivalent when the noise is estimated "
+                 "(docs/judge.md); dAIC: AIC of none minus the candidate's, as is; p: fit "
+                 "test; only a nameable candidate is named or makes the verdict ambiguous):")
     ranked = sorted(r["evidence"].items(), key=lambda kv: -kv[1]["weight"])
     for name, e in ranked:
         if not e["available"]:
@@ -142,7 +144,8 @@ def format_text(r: dict, source: str) -> str:
             continue
         gain = next((a["gain"] for a in r["alternatives"] if a["causes"] == e["causes"]), None)
         lines.append(f"  {name:46s} w {e['weight']:.3f}  dAIC {_g(e['delta_aic'], '8.1f')}  "
-                     f"k {e['n_params']:2d}  p {_g(e['p_value'], '.2g'):>7}  gain {_g(gain)}")
+                     f"k {e['n_params']:2d}  p {_g(e['p_value'], '.2g'):>7}  gain {_g(gain)}"
+                     + (f"  not nameable: {e['why_not']}" if e.get("why_not") else ""))
     sep = r["separability"]
     for p in sep["inseparable"]:
         lines.append(f"cannot separate {p['causes'][0]} from {p['causes'][1]} with these "

@@ -8,9 +8,13 @@ def _g(v, spec=".3g"):
 
 
 def noise_words(noise: dict) -> str:
-    """One line per diagnosis: each channel's total noise and where it comes from."""
+    """One line per diagnosis: each channel's total noise and where it comes from (an
+    identification part of 0 is one the table does not give: no std columns)."""
+    def ident(v):
+        rel = v["identification_rel"]
+        return f"{100 * rel:.2g} %" if rel > 0 else "not given"
     return "; ".join(
-        (f"{c} {100 * v['total_rel']:.3g} % (identification {100 * v['identification_rel']:.2g} %"
+        (f"{c} {100 * v['total_rel']:.3g} % (identification {ident(v)}"
          f", repeatability {100 * v['repeatability_rel']:.2g} %: {v['source']})")
         if v["relative"] else f"{c} {v['total_rel']:.3g} ({v['source']})"
         for c, v in noise.items())

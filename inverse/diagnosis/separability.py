@@ -122,10 +122,15 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
             vals = [pred[i] + c * eff[i] for i in range(len(obs.channels))]
             return _with_data(obs, vals[0], vals[1], vals[2] if obs.log_r is not None else None)
 
-        miss = fit_model(Model(), synth(scale), start=base.theta, iters=10).chi2
+        unit = synth(scale)
+        if np.any(unit.omega2 <= 0):              # no mode: nothing to tell apart
+            continue
+        miss = fit_model(Model(), unit, start=base.theta, iters=10).chi2
         if miss <= 0:
             continue
         data_a = synth(scale * np.sqrt(need / miss))
+        if np.any(data_a.omega2 <= 0):
+            continue
         ic_a = _ic(fit_model(Model((a,)), data_a, n_starts=1, iters=12), t_cause)
         for b in singles:
             if b == a:

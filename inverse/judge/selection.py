@@ -211,18 +211,22 @@ def drop_for_known_noise(known_drop: float, q: int, nu: float) -> float:
     return float(q * stats.f.isf(stats.chi2.sf(known_drop, q), q, nu))
 
 
-def _information(cands: dict, noise: NoiseModel, t_cause: float) -> dict:
+def _information(cands: dict, noise: NoiseModel, t_cause: float,
+                 nameable: set | None = None) -> dict:
     """``IC = chi2 + 2k + T n_causes`` of every candidate that can be fitted (module
     doc). With an estimated noise the causes' ICs are raised together, by as much as
     the best of them rises when its drop from the base model is taken at its
     known-noise equivalent: the base model against the causes is judged at the
-    known-noise false-alarm rate, the causes among themselves by their chi2."""
+    known-noise false-alarm rate, the causes among themselves by their chi2. "The best"
+    is sought among the ``nameable`` causes when there are any: a pair that may not be
+    named (its second cause idle) must not set the bar for the single cause that may."""
     ic = {k: c.chi2 + 2 * c.n_params + t_cause * len(c.causes) for k, c in cands.items()
           if c.n_data > c.n_params}
     base = cands.get("none")
     causes = [k for k in ic if k != "none"]
     if "none" not in ic or not causes:
         return ic
+    causes = [k for k in causes if k in (nameable or ())] or causes
     drop = {k: base.chi2 - cands[k].chi2 for k in causes}
     mapped = [ic[k] + drop[k] - known_noise_equivalent(
         drop[k], cands[k].n_params - base.n_params, drop_dof(base, cands[k], noise))
@@ -236,15 +240,15 @@ def select(candidates, noise: NoiseModel, t_cause: float = T_CAUSE,
     """The one model-selection rule (module doc) over ``candidates``
     (:class:`Candidate`; the base model has ``causes = ()``)."""
     cands = {c.name: c for c in candidates}
-    ic = _information(cands, noise, t_cause)
-    lo = min(ic.values()) if ic else 0.0
-    raw = {k: math.exp(-(v - lo) / 2) for k, v in ic.items()}
-    tot = sum(raw.values()) or 1.0
-    weights = {k: raw.get(k, 0.0) / tot for k in cands}
     tests = {k: fit_test(c.chi2, c.n_data, c.n_params, noise) for k, c in cands.items()}
     why = {k: _why_not(c, tests[k], p_min) or _second_cause_idle(c, cands)
            for k, c in cands.items()}
     eligible = [k for k in cands if why[k] is None]
+    ic = _information(cands, noise, t_cause, set(eligible))
+    lo = min(ic.values()) if ic else 0.0
+    raw = {k: math.exp(-(v - lo) / 2) for k, v in ic.items()}
+    tot = sum(raw.values()) or 1.0
+    weights = {k: raw.get(k, 0.0) / tot for k in cands}
     if eligible:
         best = max(eligible, key=weights.get)
         causes = cands[best].causes
