@@ -101,6 +101,15 @@ def _select_mode(data, mode):
     return int(mode), data.for_mode(int(mode))
 
 
+def _judged_noise(data, mode):
+    """The noise of each level mean that ``diagnose`` judges by (identification plus the
+    test's repeatability: :func:`inverse.diagnosis.run.level_means_and_noise`), so
+    that both commands state a contradiction against the same noise."""
+    from inverse.diagnosis.run import level_means_and_noise, observations_from
+
+    return level_means_and_noise(*observations_from(data, mode)[:4])[2]
+
+
 def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None,
              force_scale: float = DEFAULT_FORCE_SCALE, amplitude=None, fe_mode=None,
              confidence: float = DEFAULT_CONFIDENCE, eq45_factor: float = EQ45_FACTOR,
@@ -309,7 +318,7 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
             R_iv = (math.nan, math.nan)
 
     kappa = "paper" if method == "paper" else "exact"  # the kappa2 of kappa2/|kappa1|
-    contradictions = iwan_contradictions(d, chi=fitres.chi)
+    contradictions = iwan_contradictions(d, chi=fitres.chi, noise=_judged_noise(data, mode))
     random = test == "random" and -1.0 < fitres.chi <= 0.0
     return Estimate(
         method=method, mode=mode, fit_levels=fit, reference_level=int(levels[ref]),

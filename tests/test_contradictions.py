@@ -135,3 +135,21 @@ def test_a_rise_of_six_sd_is_stated_with_known_noise_not_with_a_two_dof_estimate
     kinds = lambda s: [c.kind for c in iwan_contradictions(d, None, s)]  # noqa: E731
     assert "frequency-rises" in kinds(known) and "frequency-rises" in kinds(many)
     assert "frequency-rises" not in kinds(two)
+
+
+def test_estimate_and_diagnose_state_a_contradiction_against_the_same_noise():
+    """The paper's double-beam table (no std columns, no repeats): both commands judge the
+    tie against the judge's repeatability from the smooth curve (and its dof), so they
+    give one z-score, not 32.6 "known noise" sd in one and 23.3 sd on 5 dof in the other."""
+    from cases.paper_data import DATA_FILE
+    from ident.measured import read_measured
+    from inverse.diagnose import diagnose
+    from inverse.estimate import estimate
+
+    data = read_measured(DATA_FILE)
+    by_diagnose = {c["kind"]: c for c in diagnose(data)["contradiction_details"]}
+    by_estimate = {c["kind"]: c for c in estimate(data, method="exact").contradiction_details}
+    tie_d, tie_e = by_diagnose["tie-violated"], by_estimate["tie-violated"]
+    assert tie_e["z_score"] == pytest.approx(tie_d["z_score"], rel=1e-12)
+    assert tie_e["least_loss_micro_slip"] == pytest.approx(MIN_TIE * tie_e["joint_damping_growth"])
+    assert 5 < tie_e["z_score"] < 30

@@ -153,14 +153,28 @@ def _candidates(fits, cv, obs, refuted):
     return out
 
 
-def _contradictions(d, obs, noise, base_zeta, base_params):
-    """Contradictions on the level means, against the total noise of a mean."""
+def level_means_and_noise(obs, d, stds, raw):
+    """The judge's noise model of one mode (identification plus repeatability,
+    :func:`inverse.diagnosis.noise.one_mode_noise`; sets ``obs.sigma``), the level means
+    and the noise of each mean (over the square root of the level's runs): what every
+    command states contradictions against. Arguments: :func:`observations_from`'s.
+
+    Returns (noise model, level means, :class:`inverse.contradictions.NoiseLevels`)."""
+    noise = one_mode_noise(obs, stds, raw, d.run_order)
+    obs.sigma = noise.total
     dm, _ = mean_per_level(d)
     first = np.r_[0, np.flatnonzero(np.diff(obs.levels)) + 1]
     cnt = np.diff(np.r_[first, obs.n])
     levels = NoiseLevels(noise.total["omega2"][first] / np.sqrt(cnt),
                          noise.total["zeta"][first] / np.sqrt(cnt), noise.source["omega2"],
                          noise.dof["omega2"], noise.dof["zeta"])
+    return noise, dm, levels
+
+
+def _contradictions(dm, levels, obs, base_zeta, base_params):
+    """Contradictions on the level means, against the total noise of a mean."""
+    first = np.r_[0, np.flatnonzero(np.diff(obs.levels)) + 1]
+    cnt = np.diff(np.r_[first, obs.n])
     zm = np.add.reduceat(base_zeta, first) / cnt
     return (iwan_contradictions(dm, None, levels)
             + own_contradictions(dm, base_params, zm, levels))
@@ -201,8 +215,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     Returns the spec's JSON object (see :func:`inverse.diagnosis.report.assemble`).
     """
     obs, d, stds, raw, warnings = observations_from(data, mode)
-    noise = one_mode_noise(obs, stds, raw, d.run_order)
-    obs.sigma = noise.total
+    noise, dm, mean_noise = level_means_and_noise(obs, d, stds, raw)
     untestable = {c: CATALOGUE[c].testable(obs)[1] for c in CAUSES
                   if not CATALOGUE[c].testable(obs)[0]}
     models = [m for m in MODELS if not set(m.causes) & set(untestable)]
@@ -212,7 +225,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     base = fits["none"]
     params = {k: physical_parameters(f, obs) for k, f in fits.items()}
     base_zeta = obs.zeta - base.residual[obs.n:2 * obs.n] * obs.sigma["zeta"]
-    found = _contradictions(d, obs, noise, base_zeta, params["none"])
+    found = _contradictions(dm, mean_noise, obs, base_zeta, params["none"])
     refuted = any(c.kind in _REFUTING for c in found)
     cv = {k: leave_one_out(f, obs) for k, f in fits.items()}
     sel = select(_candidates(fits, cv, obs, refuted), noise)
