@@ -267,3 +267,17 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
     fe = report(data, np.arange(10) < 7, s)["fe"]
     assert fe["failures"]["fits"] == 1
     assert "step" in fe["evidence"]["geometric-hardening"]["why_not"]
+
+
+def test_a_linearized_interval_that_crosses_a_bound_is_cut_and_not_determined():
+    """chi = -0.5 with se 0.6 on [-0.98, -0.005]: +-1.96 se reaches -1.68 and 0.68, outside
+    both bounds (a user saw [-1.72, 0.56] called "determined"); se 0.1 stays inside."""
+    from cases.fe_loop.update_report import linearized_interval
+
+    wide = linearized_interval(-0.5, 0.6, -0.98, -0.005)
+    assert wide["interval"] == [-0.98, -0.005] and wide["status"] == "not determined"
+    assert "cut at the bounds" in wide["interval_kind"]
+    narrow = linearized_interval(-0.5, 0.1, -0.98, -0.005)
+    assert narrow["interval"] == pytest.approx([-0.696, -0.304])
+    assert narrow["status"] == "determined"
+    assert linearized_interval(-0.5, math.inf, -0.98, -0.005)["interval"] == [None, None]

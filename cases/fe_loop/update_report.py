@@ -65,6 +65,21 @@ def _levels(data, mask, pred, noise) -> list:
     return rows
 
 
+def linearized_interval(value, se, lower, upper) -> dict:
+    """The 95 % interval ``value +- 1.96 se`` of a fitted parameter from the linearized
+    (misfit-scaled) covariance, cut at the parameter's bounds: a parameter whose interval
+    crosses a bound is "not determined" (its likelihood is not the quadratic that the
+    interval assumes there), as is one without a finite ``se``."""
+    kind = "linearized (misfit-scaled covariance)"
+    if not math.isfinite(se):
+        return {"interval": [None, None], "status": "not determined", "interval_kind": kind}
+    lo, hi = value - 1.96 * se, value + 1.96 * se
+    inside = lower <= lo and hi <= upper
+    return {"interval": [max(lo, lower), min(hi, upper)],
+            "status": "determined" if inside else "not determined",
+            "interval_kind": kind + ("" if inside else ", cut at the bounds it crosses")}
+
+
 def summary(r: dict) -> dict:
     """One JSON-ready dict of an update (module docstring)."""
     data, mask, best, pred = r["data"], r["fit_mask"], r["fit"], r["prediction"]
@@ -83,11 +98,7 @@ def summary(r: dict) -> dict:
             entry.update(interval=[lo, hi], status=pr.status,
                          interval_kind="profile likelihood")
         elif kind == "fitted":
-            se = best.std_error(name)
-            ok = math.isfinite(se)
-            entry.update(interval=[value - 1.96 * se, value + 1.96 * se] if ok else [None, None],
-                         status="determined" if ok else "not determined",
-                         interval_kind="linearized (misfit-scaled covariance)")
+            entry.update(linearized_interval(value, best.std_error(name), p.lower, p.upper))
             if kind == "assumed" and abs(value - p.start) > 1e-9:
                 entry["kind"] = "profile minimum (grid)"
                 entry["assumed_value"] = p.start
