@@ -17,8 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from ident.errors import InputError
 from ident.fit_quality import band_shift, mode_warnings
 from ident.frf_files import FRFSet, read_frf
