@@ -77,7 +77,10 @@ def describe(cause: str, also: list, params: dict, gain, test: dict, contradicti
                      f"they might explain the data.")
     elif cause == "none":
         if contradictions:
-            text = "The base model is kept, but the data contradict it (see contradictions)."
+            text = (f"The base model is kept (rms residual {test['rms_standardized']:.2f} "
+                    f"noise standard deviations; no extension earned its extra "
+                    f"parameters), with a caveat the data raise (see contradictions: none "
+                    f"of them refutes it).")
         elif params.get("kappa1_B", 0.0) <= 0.0:
             text = ("The data show no amplitude dependence beyond their noise: no joint "
                     "is visible (kappa1 B = 0).")
