@@ -101,6 +101,25 @@ def _select_mode(data, mode):
     return int(mode), data.for_mode(int(mode))
 
 
+#: A resonant amplitude that falls this far behind the excitation over the fit levels is
+#: worth a warning (the paper's abscissa then misplaces the top levels by as much).
+RESONANT_LAG = 1.2
+
+
+def _resonant_lag(zeta_omega2) -> list:
+    """A warning when the excitation is the abscissa (force control: the paper takes the
+    joint amplitude proportional to it) but the resonant amplitude ``E / (2 zeta
+    omega^2)`` falls behind it, because ``zeta omega^2`` grew over the fit levels."""
+    lag = float(np.max(zeta_omega2) / zeta_omega2[0])
+    if lag <= RESONANT_LAG:
+        return []
+    return [f"zeta omega^2 grows {lag:.3g}x over the fit levels: under force control the "
+            f"resonant amplitude E / (2 zeta omega^2) then grows {lag:.3g}x less than the "
+            f"excitation, which the paper's abscissa (joint amplitude proportional to the "
+            f"excitation) ignores, and chi comes out biased; `iwanfe diagnose` takes the "
+            f"resonant amplitude; with a response_amplitude column use --method amplitude"]
+
+
 def _judged_noise(data, mode):
     """The noise of each level mean that ``diagnose`` judges by (identification plus the
     test's repeatability: :func:`inverse.diagnosis.run.level_means_and_noise`), so
@@ -199,6 +218,8 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
                              f"{d.source or 'the data'} (or amplitudes from a simulation)")
     in_fit = np.isin(levels, fit)
     fi = np.flatnonzero(in_fit)
+    if abscissa == "excitation":
+        warnings += _resonant_lag(d.zeta[fi] * d.omega2[fi])
     if np.any(np.diff(amp[fi]) <= 0):
         raise InputError(f"{abscissa} must increase over the fit levels")
     ref = 0  # lowest level of the mode = the paper's f_e0
