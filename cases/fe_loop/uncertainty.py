@@ -1,10 +1,10 @@
 """Monte Carlo of any case's FE predictions over ``update``'s selected model.
 
-The nominal model is the one ``iwanfe update`` selects and fits on the same fit levels
-(:func:`cases.fe_loop.select.fe_select` and :func:`~cases.fe_loop.select.chosen_model`,
-the one judge: the base FE model or the cause it names, the closest candidate when the
-answer is ``unexplained``), its parameters fitted by weighted least squares to omega^2
-and zeta of the fit levels (:mod:`inverse.update`). Its free parameters not on a bound
+The nominal model is the one ``iwanfe update`` writes for the same fit levels
+(:func:`cases.fe_loop.update.run_update` without ``--assumptions``: the model the one
+judge selects, the base FE model or the cause it names, the closest candidate when the
+answer is ``unexplained``; its parameters fitted by weighted least squares to omega^2
+and zeta of the fit levels, :mod:`inverse.update`). Its free parameters not on a bound
 are drawn from the fit's linearized distribution (:class:`inverse.uncertainty.
 FitDistribution`: Student t with the fit's residual dof or normal, the covariance
 widened by the misfit, truncated to the parameters' bounds; parameters on a bound are
@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.fe_loop.select import chosen_model, fe_select
-from cases.fe_loop.update import UpdateSettings, load_levels
+from cases.fe_loop.update import UpdateSettings, run_update
+from inverse.fe_selection import fit_test_of
 from inverse.sample_store import SampleStore, describe
 from inverse.uncertainty import FitDistribution, SweepInputs, run_samples, sweep_hash
 from runs.executor import ExecutorSpec
@@ -108,7 +108,7 @@ def physical_check(pred, values: dict, stiffens: bool = False) -> None:
 def simulate_levels(inputs: LevelsSweepInputs, values: dict) -> dict:
     """One sample (module docstring): the parameter set ``values`` simulated from a cold
     start and checked. Returns ``frequency_hz``, ``zeta``, ``slip_over_phi_max``
-    (n_levels,) and ``chi``, ``R``, ``phi_max``, ``F_S``, ``zeta_viscous``."""
+    (n_levels,) and ``chi``, ``R``, ``phi_max``, ``F_S``, ``zeta_viscous``, ``f0_hz``."""
     fe = _prepared(inputs)
     fe.reset()             # no warm start: a sample's bits do not depend on the executor
     ext = inputs.extension
@@ -117,7 +117,8 @@ def simulate_levels(inputs: LevelsSweepInputs, values: dict) -> dict:
     return {"frequency_hz": pred.frequency_hz, "zeta": pred.zeta,
             "slip_over_phi_max": pred.slip_over_phi_max, "chi": values["chi"],
             "R": pred.joint["R"], "phi_max": pred.joint["phi_max"],
-            "F_S": pred.joint["F_S"], "zeta_viscous": values["zeta_v"]}
+            "F_S": pred.joint["F_S"], "zeta_viscous": values["zeta_v"],
+            "f0_hz": values["f0_hz"]}
 
 
 def _quantiles(rows, q) -> dict:
@@ -128,16 +129,19 @@ def _quantiles(rows, q) -> dict:
     return {"median": med.tolist(), "lo": lo.tolist(), "hi": hi.tolist()}
 
 
-def _model(sel, chosen, data, mask) -> dict:
-    """The nominal model: ``update``'s selection and how far it misses its fit levels."""
-    f, judged = chosen.fit, sel["judged"]["selection"]
-    return {"candidate": chosen.name, "cause": judged.cause, "unexplained": judged.unexplained,
-            "fit_levels": [int(v) for v in data.level[mask]], "values": dict(f.values),
-            "free": list(f.free), "at_bound": {n: f.at_bound.get(n, False) for n in f.free},
+def _model(u: dict) -> dict:
+    """The nominal model (``update``'s result ``u``) and how far it misses its fit
+    levels."""
+    f, judged = u["fit"], u["selection"]["judged"]["selection"]
+    return {"candidate": u["candidate"], "cause": judged.cause,
+            "unexplained": judged.unexplained,
+            "fit_levels": [int(v) for v in u["data"].level[u["fit_mask"]]],
+            "values": dict(f.values), "free": list(f.free),
+            "at_bound": {n: f.at_bound.get(n, False) for n in f.free},
             "std_error": {n: f.std_error(n) for n in f.free}, "chi2": f.chi2,
             "n_residuals": f.n, "rms_misfit_sd": math.sqrt(f.chi2 / f.n),
-            "fit_test": judged.tests[chosen.name].to_json(), "kind": "fitted",
-            "rule": "cases.fe_loop.select.fe_select (as update)"}
+            "fit_test": fit_test_of(f, u["selection"]["judge_noise"]).to_json(),
+            "kind": "fitted", "rule": "cases.fe_loop.update.run_update (as update)"}
 
 
 def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
@@ -166,13 +170,13 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     if study.data_path is None:
         raise ValueError("no measured data: give FILE (the case names none)")
     t0 = time.perf_counter()
-    data, mask = load_levels(UpdateSettings(study.data_path, study.mode_label,
-                                            study.fit_levels, study.force_scale))
-    sel = fe_select(data, mask, levels(data, force_scale=study.force_scale))
-    ext, chosen = chosen_model(sel)
+    u = run_update(UpdateSettings(study.data_path, study.mode_label, study.fit_levels,
+                                  study.force_scale), levels, executor=executor,
+                   case_name=study.case)
+    data, mask, ext = u["data"], u["fit_mask"], u["extension"]
     t_sel = time.perf_counter() - t0
-    dist = FitDistribution.from_fit(chosen.fit, chosen.problem.parameters, distribution)
-    study = replace(study, candidate=chosen.name)
+    dist = FitDistribution.from_fit(u["fit"], u["parameters"], distribution)
+    study = replace(study, candidate=u["candidate"])
     inputs = LevelsSweepInputs(model=model, data=data, study=study, distribution=dist,
                                simulate=simulate_levels, levels=levels, extension=ext)
     digest = sweep_hash(inputs, seed)
@@ -181,8 +185,8 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
         {"seed": seed, "distribution": distribution, "study": describe(study)})
     nominal, samples = run_samples(inputs, n_samples, seed, store, executor, progress)
     if nominal.status != "ok":
-        raise ValueError(f"update's selected model ({chosen.name}) is not physical at its "
-                         f"fit: {nominal.status}")
+        raise ValueError(f"update's selected model ({u['candidate']}) is not physical at "
+                         f"its fit: {nominal.status}")
     ok = [s for s in samples if s.status == "ok"]
     q = (0.5 * (1 - confidence), 0.5 * (1 + confidence))
     mc_f = _quantiles([s.values["frequency_hz"] for s in ok], q)
@@ -204,7 +208,7 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     return {
         "case": study.case, "source": str(study.data_path), "mode": study.mode_label,
         "route": "exact describing function, phase resonance (FE-levels model)",
-        "model": _model(sel, chosen, data, mask),
+        "model": _model(u),
         "distribution": {**dist.to_dict(),
                          "kept_fraction": len(samples) / draws if draws else None},
         "n_samples": int(n_samples), "seed": int(seed), "confidence": confidence,
