@@ -232,3 +232,40 @@ def test_measured_frf_files_named_by_a_pattern_are_identified(planted, tmp_path,
     assert resolve_case(str(case_file)).measured_data() == path         # cached
     c = _json(capsys, "update", "--case", case_file)["parameters"]["chi"]
     assert abs(c["value"] - planted[1]) < 0.05
+
+
+@pytest.mark.parametrize("change, words", [
+    ({}, None),
+    ({"phi_max": 0.0}, "no joint"),
+    ({"F_S": -1.0}, "no joint"),
+    ({"frequency_hz": 80.0 * (1 + 1e-4)}, "above the stuck-joint frequency"),
+    ({"zeta": 0.002 * (1 - 1e-4)}, "below the viscous one"),
+])
+def test_an_unphysical_sample_is_a_failure_with_its_reason(change, words):
+    """What the user's steel lap sample 9 showed (phi_max 5e-45 m, a level above its own
+    stuck frequency, a damping ratio below the viscous one): each is a ValueError
+    naming it (counted as a failed sample, left out of the quantiles); a softening,
+    dissipating prediction passes; a stiffening cause may pass the stuck frequency."""
+    from cases.fe_loop.causes import EXTENSIONS
+    from cases.fe_loop.levels import LevelPrediction
+    from cases.fe_loop.uncertainty import physical_check
+
+    f = np.array([79.99, 79.9, 79.5])
+    z = np.array([0.00201, 0.0025, 0.004])
+    joint = {"phi_max": 1e-6, "F_S": 10.0}
+    if "frequency_hz" in change:
+        f[1] = change["frequency_hz"]
+    if "zeta" in change:
+        z[2] = change["zeta"]
+    joint.update({k: v for k, v in change.items() if k in joint})
+    pred = LevelPrediction((2 * math.pi * f) ** 2, z, np.ones(3), joint)
+    values = {"f0_hz": 80.0, "zeta_v": 0.002}
+    if words is None:
+        physical_check(pred, values)
+        return
+    with pytest.raises(ValueError, match=words):
+        physical_check(pred, values)
+    stiffens = EXTENSIONS["geometric-hardening"].stiffens
+    assert stiffens and not EXTENSIONS["quadratic-damping"].stiffens
+    if "phi_max" not in change and "F_S" not in change:
+        physical_check(pred, values, stiffens)
