@@ -23,6 +23,10 @@ redrawn from the task's generator, i.e. the distribution is truncated to the Iwa
 (its mass there, ``F_nu((1 - p^)/sigma_p) - F_nu(-p^/sigma_p)``, is reported as
 ``admissible_fraction``).
 
+:class:`FitDistribution` is (1) for the free parameters of a model-updating fit
+(:class:`inverse.update.Fit`, e.g. ``update``'s selected FE model), truncated to the
+parameters' bounds instead.
+
 What a sample computes is the caller's per-sample model (``SweepInputs.simulate``, e.g.
 :func:`cases.double_beam.uncertainty.simulate_fe`); a sample that fails with one of
 :data:`SAMPLE_FAILURES` is kept with its reason.
