@@ -40,7 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-__all__ = ["SIMULATION_FAILURES", "InternalError", "Parameter", "NoiseModel", "UpdateProblem", "Fit", "fit"]
+__all__ = ["SIMULATION_FAILURES", "InternalError", "Parameter", "NoiseModel", "UpdateProblem",
+           "Fit", "fit"]
 
 #: What a failed simulation raises (no steady state, a parameter set no model has, an
 #: overflow): counted, never fatal.

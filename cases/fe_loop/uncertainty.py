@@ -141,7 +141,7 @@ def _model(u: dict) -> dict:
             "std_error": {n: f.std_error(n) for n in f.free}, "chi2": f.chi2,
             "n_residuals": f.n, "rms_misfit_sd": math.sqrt(f.chi2 / f.n),
             "fit_test": fit_test_of(f, u["selection"]["judge_noise"]).to_json(),
-            "kind": "fitted", "rule": "cases.fe_loop.update.run_update (as update)"}
+            "kind": "fitted", "rule": "cases.fe_loop.update.run_update"}
 
 
 def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,

@@ -10,8 +10,8 @@ filter per sample, with the estimator's closed-form interval beside,
 (a case file with iwan4 joints) runs :mod:`cases.fe_loop.uncertainty` instead: the
 parameters of the model ``update`` selects for the same levels drawn from its fit (the
 nominal is ``update``'s model; unphysical samples counted failed), each simulated by
-exact describing function at phase resonance. Every finished sample is stored under ``--out``; a rerun
-computes only the missing ones.
+exact describing function at phase resonance. Every finished sample is stored under
+``--out``; a rerun computes only the missing ones.
 """
 from __future__ import annotations
 

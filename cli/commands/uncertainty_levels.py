@@ -30,7 +30,8 @@ def text(r: dict) -> str:
     lines = [f"iwanfe uncertainty {r['source']}  case {r['case']}  mode {r['mode']}  "
              f"fit levels {m['fit_levels']}",
              f"  nominal: update's selected model '{m['candidate']}' (cause "
-             f"{'unexplained' if m['unexplained'] else m['cause']}; {m['rule']}), fitted",
+             f"{'unexplained' if m['unexplained'] else m['cause']}) with its fitted "
+             f"parameters ({m['rule']})",
              f"  it misses its fit levels by {m['rms_misfit_sd']:.3g} noise sd rms "
              f"(chi2 = {m['chi2']:.4g} on {m['n_residuals']} residuals; fit test p = "
              f"{_f(ft.get('p_value'), '.2g')}, {ft.get('test', '')})",
