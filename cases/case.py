@@ -21,7 +21,7 @@ CAPABILITIES = {
     "fe_levels": "FE-levels model of measured levels (diagnose DATA --case)",
     "fe_check": "FE-level check of a one-mode diagnosis (diagnose DATA --case)",
     "uncertainty": "Monte Carlo of its own stepped-sine study (uncertainty)",
-    "fe_uncertainty": "Monte Carlo of its FE-levels predictions over the identified joint "
+    "fe_uncertainty": "Monte Carlo of its FE-levels predictions over update's model "
                       "(uncertainty)",
 }
 

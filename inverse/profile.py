@@ -184,7 +184,9 @@ def profile_branch(task, problem: UpdateProblem) -> list:
                 key=lambda f: (not f.success, f.chi2))
         if not f.success:
             return ProfilePoint(v, f.chi2)
-        extra = problem.describe(f.values) if problem.describe is not None else None
+        extra = problem.figures(f.values)
+        if extra is None and problem.describe is not None:   # its figures failed: counted
+            return ProfilePoint(v, f.chi2)
         return ProfilePoint(v, f.chi2, dict(f.values), extra)
 
     i, extended = 0, 0
@@ -259,7 +261,9 @@ def run_profiles(problem: UpdateProblem, best: Fit, grids: dict, free,
         func = stored_branch
     results = run_sweep(func, tasks, executor=executor, shared=problem,
                         progress=progress, desc="profiles", unit="branch")
-    extra = problem.describe(best.values) if problem.describe is not None else None
+    if hasattr(problem.simulate, "reset"):   # as in a branch: no warm start from one
+        problem.simulate.reset()
+    extra = problem.figures(best.values)
     pts: dict = {name: [ProfilePoint(best.values[name], best.chi2, dict(best.values), extra)]
                  for name in grids}
     for task, branch in zip(tasks, results):

@@ -23,6 +23,10 @@ redrawn from the task's generator, i.e. the distribution is truncated to the Iwa
 (its mass there, ``F_nu((1 - p^)/sigma_p) - F_nu(-p^/sigma_p)``, is reported as
 ``admissible_fraction``).
 
+:class:`FitDistribution` is (1) for the free parameters of a model-updating fit
+(:class:`inverse.update.Fit`, e.g. ``update``'s selected FE model), truncated to the
+parameters' bounds instead.
+
 What a sample computes is the caller's per-sample model (``SweepInputs.simulate``, e.g.
 :func:`cases.double_beam.uncertainty.simulate_fe`); a sample that fails with one of
 :data:`SAMPLE_FAILURES` is kept with its reason.
@@ -54,6 +58,7 @@ __all__ = [
     "DISTRIBUTIONS",
     "SAMPLE_FAILURES",
     "ParameterDistribution",
+    "FitDistribution",
     "SweepInputs",
     "sweep_hash",
     "run_samples",
@@ -173,6 +178,109 @@ class ParameterDistribution:
                 "admissible_fraction": self.admissible_fraction()}
 
 
+    def arguments(self, x, nominal: bool) -> tuple:
+        """The per-sample model's arguments after ``inputs``: ``(p, ln_kt)``, or
+        ``(None, None)`` for the nominal sample."""
+        return (None, None) if nominal else (float(x[0]), float(x[1]))
+
+    def joint(self, x) -> tuple:
+        """``(p, ln_kt)`` of a draw (kept with the sample)."""
+        return float(x[0]), float(x[1])
+
+    def hashed(self) -> tuple:
+        """The arrays :func:`sweep_hash` covers."""
+        return (self.mean, self.cov, np.array([self.dof]),
+                np.array(self.p_bounds, dtype=float))
+
+
+@dataclass(frozen=True)
+class FitDistribution:
+    """Eq. (1) for the free parameters of a model-updating fit (:class:`inverse.update.
+    Fit`, e.g. ``update``'s selected FE model) that are not on a bound: ``x = x^ + L z
+    sqrt(nu / w)``, ``L L^T = C`` the fit's covariance times its misfit scale
+    (:attr:`inverse.update.Fit.misfit_scale`), ``nu`` its residual dof (``math.inf``:
+    normal); the parameters on a bound and the fixed ones are held (``fixed``), as the
+    fit's prediction intervals hold them. A draw outside a parameter's bounds (the
+    domain the model is fitted in, e.g. ``-1 < chi < 0``, ``zeta_v > 0``) is rejected
+    and redrawn: the distribution is truncated to that domain, and the fraction of
+    draws kept estimates its mass there.
+
+    Parameters are named (``names``); a sample is the full parameter dict
+    (:meth:`values`), whose ``chi`` and ``ln_dc1`` give the ``(p, ln_kt)`` kept with it.
+    """
+
+    names: tuple
+    mean: np.ndarray
+    cov: np.ndarray
+    dof: float
+    lower: np.ndarray
+    upper: np.ndarray
+    fixed: dict
+    max_draws: int = 100000
+
+    @classmethod
+    def from_fit(cls, fit, parameters: dict, kind: str = "t") -> "FitDistribution":
+        """From a :class:`inverse.update.Fit` and its problem's ``parameters``
+        (:class:`inverse.update.Parameter`, for the bounds)."""
+        if kind not in DISTRIBUTIONS:
+            raise ValueError(f"distribution must be one of {', '.join(DISTRIBUTIONS)}, "
+                             f"got {kind!r}")
+        names = tuple(n for n in fit.free if not fit.at_bound.get(n))
+        if fit.cov is None or fit.dof < 1 or not names:
+            raise ValueError("the fit has no covariance of a parameter inside its bounds "
+                             "to sample from")
+        idx = [fit.free.index(n) for n in names]
+        cov = np.asarray(fit.cov)[np.ix_(idx, idx)] * fit.misfit_scale
+        return cls(names, np.array([fit.values[n] for n in names]), cov,
+                   float(fit.dof) if kind == "t" else math.inf,
+                   np.array([parameters[n].lower for n in names], dtype=float),
+                   np.array([parameters[n].upper for n in names], dtype=float),
+                   {k: float(v) for k, v in fit.values.items() if k not in names})
+
+    @property
+    def factor(self) -> np.ndarray:
+        """``L`` with ``L L^T = C`` (symmetric square root; a zero variance gives a
+        zero column)."""
+        w, v = np.linalg.eigh(np.asarray(self.cov, dtype=float))
+        return v * np.sqrt(np.maximum(w, 0.0))
+
+    def draw(self, seed) -> tuple[np.ndarray, int]:
+        """One draw inside the bounds from ``np.random.default_rng(seed)``; (x, draws)."""
+        rng = np.random.default_rng(seed)
+        L = self.factor
+        for n in range(1, self.max_draws + 1):
+            z = rng.standard_normal(len(self.names))
+            s = 1.0 if math.isinf(self.dof) else math.sqrt(self.dof / rng.chisquare(self.dof))
+            x = self.mean + s * (L @ z)
+            if np.all((self.lower <= x) & (x <= self.upper)):
+                return x, n
+        raise ValueError(f"no draw inside the parameters' bounds in {self.max_draws} tries")
+
+    def values(self, x) -> dict:
+        """The full parameter dict of a draw ``x``."""
+        return {**self.fixed, **{k: float(v) for k, v in zip(self.names, x)}}
+
+    def arguments(self, x, nominal: bool) -> tuple:
+        return (self.values(x),)
+
+    def joint(self, x) -> tuple:
+        v = self.values(x)
+        p = v["chi"] + 1.0
+        return p, math.log(p) + v["ln_dc1"]
+
+    def hashed(self) -> tuple:
+        held = sorted(self.fixed)
+        return (self.mean, self.cov, np.array([self.dof]), self.lower, self.upper,
+                np.array(held + list(self.names)), np.array([self.fixed[k] for k in held]))
+
+    def to_dict(self) -> dict:
+        sd = np.sqrt(np.diag(self.cov))
+        return {"parameters": list(self.names), "mean": self.mean, "cov": self.cov,
+                "sd": sd, "dof": None if math.isinf(self.dof) else self.dof,
+                "kind": "normal" if math.isinf(self.dof) else "t",
+                "lower": self.lower, "upper": self.upper, "held": dict(self.fixed)}
+
+
 @dataclass(frozen=True)
 class SweepInputs:
     """What every task receives once (the ``shared`` object of :func:`run_sweep`).
@@ -197,12 +305,10 @@ def _sample_task(task, inputs: SweepInputs) -> SampleResult:
     ``SeedSequence`` or None (the nominal sample)."""
     index, seed = task
     t0 = time.perf_counter()
-    if seed is None:
-        (p, ln_kt), n_draws = inputs.distribution.mean, 0
-        args = (None, None)
-    else:
-        (p, ln_kt), n_draws = inputs.distribution.draw(seed)
-        args = (float(p), float(ln_kt))
+    dist = inputs.distribution
+    x, n_draws = (dist.mean, 0) if seed is None else dist.draw(seed)
+    args = dist.arguments(x, seed is None)
+    p, ln_kt = dist.joint(x)
     try:
         with np.errstate(all="ignore"):
             values, status = inputs.simulate(inputs, *args), "ok"
@@ -234,8 +340,7 @@ def sweep_hash(inputs: SweepInputs, seed: int) -> str:
     d = inputs.data
     for a in (d.level, d.excitation, d.omega2, d.zeta):
         add(np.asarray(a, dtype=float))
-    dist = inputs.distribution
-    for a in (dist.mean, dist.cov, np.array([dist.dof]), np.array(dist.p_bounds, dtype=float)):
+    for a in inputs.distribution.hashed():
         add(a)
     study = dataclasses.replace(inputs.study, data_path=None)   # the data are hashed above
     sim = f"{inputs.simulate.__module__}.{inputs.simulate.__qualname__}"

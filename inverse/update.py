@@ -40,8 +40,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-__all__ = ["InternalError", "Parameter", "NoiseModel", "UpdateProblem", "Fit", "fit"]
+__all__ = ["SIMULATION_FAILURES", "InternalError", "Parameter", "NoiseModel", "UpdateProblem",
+           "Fit", "fit"]
 
+#: What a failed simulation raises (no steady state, a parameter set no model has, an
+#: overflow): counted, never fatal.
+SIMULATION_FAILURES = (RuntimeError, ValueError, ArithmeticError)
 _FAILED = 1e4   # residual of a failed simulation, in noise units (counted, never reported)
 #: A free parameter this close to a bound (in units of its step) is at the bound.
 AT_BOUND_STEPS = 1e-4
@@ -104,7 +108,7 @@ class UpdateProblem:
         m = self.fit_mask if mask is None else np.asarray(mask, dtype=bool)
         try:
             om2, ze = self.simulate(values)
-        except (RuntimeError, ValueError, ArithmeticError):
+        except SIMULATION_FAILURES:
             self.failures += 1
             return np.full(2 * int(m.sum()), _FAILED)
         r = np.concatenate([(om2[m] - self.omega2[m]) / self.noise.sigma_omega2[m],
@@ -112,6 +116,17 @@ class UpdateProblem:
         if not np.all(np.isfinite(r)):
             self.failures += 1
         return np.where(np.isfinite(r), r, _FAILED)
+
+    def figures(self, values: dict) -> dict | None:
+        """``describe(values)`` (None without ``describe``); a failed simulation counts
+        in ``failures`` and gives None, as in :meth:`residuals`."""
+        if self.describe is None:
+            return None
+        try:
+            return self.describe(values)
+        except SIMULATION_FAILURES:
+            self.failures += 1
+            return None
 
     def chi2_by_channel(self, values: dict, mask=None) -> dict:
         """Eq. (1)'s chi2 per channel, ``{"omega2": .., "zeta": ..}``, on ``mask``

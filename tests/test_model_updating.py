@@ -281,3 +281,68 @@ def test_a_linearized_interval_that_crosses_a_bound_is_cut_and_not_determined():
     assert narrow["interval"] == pytest.approx([-0.696, -0.304])
     assert narrow["status"] == "determined"
     assert linearized_interval(-0.5, math.inf, -0.98, -0.005)["interval"] == [None, None]
+
+
+def test_profile_figures_that_fail_are_counted_not_fatal():
+    """A ``describe`` (the headline figures kept with every profile point) that fails
+    where ``ln_dc1`` lies at or above its optimum: the profiles
+    finish, the points whose figures failed count as failed (the side they leave open
+    says so), the others keep their figures, and every failure is in ``failures``."""
+    om2, ze = ModalIwan()(TRUTH)
+    noise = NoiseModel(np.full(10, 15.0), np.full(10, 3e-6), "planted")
+    free = ("chi", "ln_dc1", "zv", "w0")
+    def describe(v):
+        if v["ln_dc1"] >= best.values["ln_dc1"]:
+            raise RuntimeError("no steady state")
+        return {"chi": v["chi"]}
+
+    prob = UpdateProblem(ModalIwan(), om2, ze, noise, np.ones(10, dtype=bool), PARAMS,
+                         describe=describe)
+    best = fit(prob, free, start=TRUTH)
+    grid = linear_grid(best, "ln_dc1", PARAMS["ln_dc1"], 3)
+    pr = run_profiles(prob, best, {"ln_dc1": grid}, free)["ln_dc1"]
+    above = [p for p in pr.points if p.value > best.values["ln_dc1"]]
+    assert above and all(p.values is None for p in above)
+    assert pr.failed_points == len(above) and "upper" in pr.failed_sides
+    below = [p for p in pr.points if best.values["ln_dc1"] > p.value]
+    assert below and all(p.extra == {"chi": p.values["chi"]} for p in below)
+    assert prob.failures >= len(above) + 1          # + the optimum's own figures
+
+
+def test_a_cause_whose_optimum_fails_from_a_cold_start_is_counted_not_fatal(monkeypatch):
+    """An FE cause whose balance converges only from a warm start (as the first-harmonic
+    balance of a free-free lap joint with chi on its bound did: the fit reached its
+    optimum through warm starts, and every later use of the model, profiles and
+    prediction intervals, starts cold): the FE model choice reports it as a failed fit
+    with the reason, the judge goes on with the others and the report finishes."""
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+    from cases.fe_loop.diagnosis import report
+    from cases.fe_loop.select import fe_select
+    from fe.newton_path import SteadyStateError
+    from ident.modal_data import MeasuredData
+
+    predict = DoubleBeamLevels.predict
+
+    def warm_only(self, p, extension=None):
+        if extension is not None and extension.cause == "geometric-hardening" \
+                and not self._warm:
+            raise SteadyStateError("252 Hz", "line search stalled (planted)")
+        return predict(self, p, extension)
+
+    monkeypatch.setattr(DoubleBeamLevels, "predict", warm_only)
+    om2, ze = ModalIwan()(TRUTH)
+    rng = np.random.default_rng(4)
+    data = MeasuredData(level=np.arange(1, 11), excitation=EXC,
+                        omega2=(2 * np.pi * 252.0) ** 2 / om2[0] * om2
+                        * (1 + 5e-6 * rng.standard_normal(10)),
+                        zeta=ze * (1 + 2e-4 * rng.standard_normal(10)),
+                        mode=np.ones(10, dtype=int), run_order=np.arange(1, 11))
+    mask = np.arange(10) < 7
+    s = fe_select(data, mask, DoubleBeamLevels.from_data(data),
+                  causes=("geometric-hardening", "quadratic-damping"))
+    c = s["extensions"]["geometric-hardening"][1]
+    assert c.fit is None and "cold start" in c.excluded and "planted" in c.excluded
+    assert s["extensions"]["quadratic-damping"][1].fit is not None
+    fe = report(data, mask, s)["fe"]
+    assert fe["failures"]["fits"] == 1 and fe["candidate"] != "geometric-hardening"
+    assert "cold start" in fe["evidence"]["geometric-hardening"]["why_not"]

@@ -353,3 +353,59 @@ def test_cli_json_run_writes_report_and_plot(tmp_path, capsys):
     assert (out / "uncertainty.png").stat().st_size > 0
     assert json.loads((out / "uncertainty.json").read_text())["hash"] == d["hash"]
     assert len(list(out.glob("samples-*/sample_*.npz"))) == 1
+
+
+def _update_fit(chi2_over_dof=2.0):
+    """A model-updating fit with a planted covariance (chi, ln_dc1, f0_hz free; zeta_v
+    free but on its lower bound), misfit scale ``chi2_over_dof``."""
+    from inverse.update import Fit, Parameter
+
+    sd = np.array([0.1 / math.sqrt(chi2_over_dof), 0.5, 0.2])   # chi: sd 0.1 when scaled
+    corr = np.array([[1.0, 0.6, -0.3], [0.6, 1.0, 0.2], [-0.3, 0.2, 1.0]])
+    cov = np.zeros((4, 4))
+    cov[np.ix_([0, 1, 3], [0, 1, 3])] = corr * np.outer(sd, sd)
+    values = {"chi": -0.5, "ln_dc1": 5.0, "zeta_v": 1e-5, "f0_hz": 80.0, "log10_kt": 7.0}
+    fit = Fit(values, ("chi", "ln_dc1", "zeta_v", "f0_hz"), chi2=chi2_over_dof * 16, n=20,
+              cov=cov, nfev=1, seconds=0.0, success=True, at_bound={"zeta_v": "lower"})
+    params = {"chi": Parameter("chi", -0.5, -0.6, -0.4, 0.05),
+              "ln_dc1": Parameter("ln_dc1", 5.0, -15.0, 15.0, 0.2),
+              "zeta_v": Parameter("zeta_v", 1e-5, 1e-5, 0.2, 1e-5),
+              "f0_hz": Parameter("f0_hz", 80.0, 70.0, 90.0, 1e-3)}
+    return fit, params, chi2_over_dof * cov[np.ix_([0, 1, 3], [0, 1, 3])]
+
+
+def test_fit_distribution_draws_the_fit_inside_its_bounds():
+    """``FitDistribution`` of an update fit (normal): the parameter on a bound and the
+    assumed one held; chi truncated to its bounds [-0.6, -0.4] = mean +- 1 sd, so the
+    kept fraction is the normal mass within 1 sd (0.6827) and every draw lies inside;
+    the untruncated parameter's mean is unbiased by a symmetric truncation (its
+    covariance with chi only scales its variance, closed form:
+    ``var(y) = s_y^2 (1 - rho^2 (1 - v1))``, ``v1 = 1 - 2 phi(1)/(2 Phi(1) - 1)`` the
+    variance of a standard normal truncated to +-1), and the sample carries the
+    fit's (p, ln_kt) coordinates."""
+    from inverse.uncertainty import FitDistribution
+
+    fit, params, cov = _update_fit()
+    dist = FitDistribution.from_fit(fit, params, "normal")
+    assert dist.names == ("chi", "ln_dc1", "f0_hz")
+    assert dist.fixed == {"zeta_v": 1e-5, "log10_kt": 7.0}
+    assert np.allclose(dist.cov, cov)
+    n, draws, xs = 4000, 0, []
+    for seed in task_seeds(3, n):
+        x, k = dist.draw(seed)
+        xs.append(x)
+        draws += k
+    xs = np.array(xs)
+    assert np.all((xs[:, 0] >= -0.6) & (xs[:, 0] <= -0.4))
+    mass = stats.norm.cdf(1) - stats.norm.cdf(-1)
+    assert abs(n / draws - mass) < 4 * math.sqrt(mass * (1 - mass) / draws)
+    v1 = 1 - 2 * stats.norm.pdf(1) / mass
+    for j in (1, 2):
+        s2, rho = cov[j, j], cov[0, j] / math.sqrt(cov[0, 0] * cov[j, j])
+        var = s2 * (1 - rho ** 2 * (1 - v1))
+        assert abs(xs[:, j].mean() - dist.mean[j]) < 4 * math.sqrt(var / n)
+        assert xs[:, j].var() == pytest.approx(var, rel=0.1)
+    v = dist.values(xs[0])
+    assert v["zeta_v"] == 1e-5 and v["chi"] == xs[0, 0]
+    p, ln_kt = dist.joint(xs[0])
+    assert p == pytest.approx(v["chi"] + 1) and ln_kt == pytest.approx(math.log(p) + v["ln_dc1"])

@@ -83,6 +83,9 @@ class Extension:
     unit = ""
     description = ""
     lower, upper = 0.0, math.inf
+    #: whether the effect can raise the stiffness: then a level's frequency may pass
+    #: the stuck-joint one and its damping ratio fall below the viscous one
+    stiffens = False
 
     def step(self, fe, base, noise, top) -> float:
         """A parameter change that moves the top fit level by about one noise unit."""
@@ -177,6 +180,7 @@ class AirDrag(Extension):
 class CubicHardening(Extension):
     cause, parameter, unit = "geometric-hardening", "k3", "1/(kg s^2 m^2)"
     description = "modal cubic stiffness k3 (mass-normalized mode)"
+    stiffens = True
 
     def step(self, fe, base, noise, top):
         a = float(base.modal_amplitude[top])
@@ -194,7 +198,7 @@ class CubicHardening(Extension):
 class ThermalDrift(Extension):
     cause, parameter, unit = "thermal-drift", "drift", "1/run"
     description = "relative stiffness change per run (every stiffness alike)"
-    lower = -math.inf
+    lower, stiffens = -math.inf, True
 
     def step(self, fe, base, noise, top):
         span = max(float(np.ptp(fe.run_order)), 1.0)
@@ -237,6 +241,7 @@ class Combined(Extension):
     def __init__(self, first: Extension, second: Extension):
         self.first, self.second = first, second
         self.cause = f"{first.cause}+{second.cause}"
+        self.stiffens = first.stiffens or second.stiffens
 
     @property
     def parameter_names(self):

@@ -23,6 +23,7 @@ channel).
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -33,10 +34,11 @@ from cases.fe_loop.levels import BASE_PARAMETERS, FELevels, Simulator
 from inverse import judge
 from inverse.fe_selection import FitCandidate, judge_extensions
 from inverse.estimate import estimate
-from inverse.update import InternalError, NoiseModel, Parameter, UpdateProblem, fit
+from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Parameter,
+                            UpdateProblem, fit)
 
 __all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable",
-           "fit_base", "fe_select", "chosen_model"]
+           "fit_base", "cold_failure", "fe_select", "chosen_model"]
 
 #: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
 MICRO_LIMIT = 50.0
@@ -140,6 +142,23 @@ def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
     return best, list(starts)
 
 
+def cold_failure(fe: FELevels, f, ext=None) -> str | None:
+    """Why fit ``f`` cannot be simulated at its optimum from a cold start (None: it
+    can). A fit reaches its optimum through warm-started simulations, which can carry
+    the balance where a cold start does not converge; every later use of the model
+    (profiles, prediction intervals, ``uncertainty``) starts cold. A copy is probed,
+    so ``fe`` keeps its warm starts."""
+    if f is None:
+        return None
+    probe = copy.copy(fe)
+    probe.reset()
+    try:
+        probe.predict(f.values, ext)
+    except SIMULATION_FAILURES as exc:
+        return f"its optimum cannot be simulated from a cold start: {exc}"
+    return None
+
+
 def _problem(base_problem, fe, ext, base_pred, top):
     spec = ext.spec(fe, base_pred, base_problem.noise, top)
     P = dict(base_problem.parameters)
@@ -213,6 +232,10 @@ def _select(data, mask, fe, causes, say) -> dict:
             exts[cause] = (ext, FitCandidate((cause,), base_problem, None, [],
                                              f"its fit failed: {exc}"))
             continue
+        why = cold_failure(fe, f, ext)
+        if why:                  # counted and reported; the judge goes on with the others
+            exts[cause] = (ext, FitCandidate((cause,), prob, None, s, why))
+            continue
         c = FitCandidate((cause,), prob, f, s)
         if f is not None and _inactive(ext, f):
             c.excluded = "its effect fitted to zero (the base model)"
@@ -234,7 +257,9 @@ def _select(data, mask, fe, causes, say) -> dict:
             prob = _problem(base_problem, fe, pair, base_pred, top)
             f, s = _fit_extension(prob, pair, exts[first][1].fit.values,
                                   [exts[first][1].fit.values["chi"]])
-            exts[pair.cause] = (pair, FitCandidate((first, other), prob, f, s))
+            why = cold_failure(fe, f, pair)
+            exts[pair.cause] = (pair, FitCandidate((first, other), prob, None if why else f,
+                                                   s, why))
     judged = judge_extensions(base, [c for _, c in exts.values()], jn, progress=say)
     return {"fe": fe, "noise": noise, "judge_noise": jn, "base": base, "extensions": exts,
             "judged": judged, "untested": skip, "chosen": judged["selection"].best}

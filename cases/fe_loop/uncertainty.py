@@ -1,20 +1,27 @@
-"""Monte Carlo of any case's FE predictions over the identified joint (exact-DF route).
+"""Monte Carlo of any case's FE predictions over ``update``'s selected model.
 
-The estimator's fit of the fit levels (``exact``, paper eq. 33-35,
-:func:`inverse.estimate.estimate`) gives ``(p, ln Kt)`` = ``(chi + 1, ln((chi+1)
-|kappa1| B))`` with its covariance; :mod:`inverse.uncertainty` draws from it (Student t
-with the fit's dof or normal, truncated to -1 < chi < 0, one executor task and one seed
-stream per sample, resumable store). Each sample is put into the case's FE-levels model
-(:class:`cases.fe_loop.levels.FELevels`: one Iwan element per joint element, ``beta =
-0``, ``chi = p - 1``, ``|kappa1| B~ = Kt / p`` at level 1, eq. 36-37) with the stuck
-frequency and the viscous damping matched to the measured level 1
-(:func:`cases.fe_loop.backbone.estimated_joint`) and simulated at every level by
-first-harmonic balance at phase resonance with the exact describing function
-(:func:`fe.hb_resonance.resonance_levels`, from a cold start: a few ms per sample). The report gives per level the measured value, the nominal prediction (the
-estimate itself) and the samples' median and central interval; failed samples are
-counted with their reason and left out of the quantiles. (The double beam's own
-Monte Carlo, a Jenkins-bank stepped sine per sample, is
-:mod:`cases.double_beam.uncertainty`.)
+The nominal model is the one ``iwanfe update`` writes for the same fit levels
+(:func:`cases.fe_loop.update.run_update` without ``--assumptions``: the model the one
+judge selects, the base FE model or the cause it names, the closest candidate when the
+answer is ``unexplained``; its parameters fitted by weighted least squares to omega^2
+and zeta of the fit levels, :mod:`inverse.update`). Its free parameters not on a bound
+are drawn from the fit's linearized distribution (:class:`inverse.uncertainty.
+FitDistribution`: Student t with the fit's residual dof or normal, the covariance
+widened by the misfit, truncated to the parameters' bounds; parameters on a bound are
+held, as in the fit's prediction intervals), one executor task and one seed stream per
+sample, resumable store. Each sample is simulated at every level by the case's FE-levels
+model (:class:`cases.fe_loop.levels.FELevels`: first-harmonic balance at phase
+resonance with the exact describing function, from a cold start: a few ms per sample).
+
+A sample must be physical, else it is counted failed with its reason and left out of
+the quantiles (:func:`physical_check`): its joints have a positive strength (``F_S``,
+``phi_max`` > 0) and, unless the model's cause stiffens (:attr:`cases.fe_loop.causes.
+Extension.stiffens`), no level's frequency lies above the stuck-joint frequency
+``f0_hz`` and no damping ratio below the viscous ``zeta_v`` (an Iwan joint softens
+and dissipates). The report gives per level the measured value, the nominal prediction
+and the samples' median and central interval, and how far the nominal misses its fit
+levels (rms in noise sd, the fit test). (The double beam's own Monte Carlo, a
+Jenkins-bank stepped sine per sample, is :mod:`cases.double_beam.uncertainty`.)
 
 SI units: Hz, rad^2/s^2; damping ratios as fractions.
 """
@@ -22,67 +29,96 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from cases.fe_loop.backbone import estimated_joint
-from ident.measured import read_measured
-from inverse.estimate import estimate, parse_levels
+from cases.fe_loop.update import UpdateSettings, run_update
+from inverse.fe_selection import fit_test_of
 from inverse.sample_store import SampleStore, describe
-from inverse.uncertainty import ParameterDistribution, SweepInputs, run_samples, sweep_hash
+from inverse.uncertainty import FitDistribution, SweepInputs, run_samples, sweep_hash
 from runs.executor import ExecutorSpec
 
-__all__ = ["LevelsStudy", "LevelsSweepInputs", "simulate_levels", "run_fe_uncertainty"]
+__all__ = ["LevelsStudy", "LevelsSweepInputs", "physical_check", "simulate_levels",
+           "run_fe_uncertainty"]
+
+#: Round-off allowed in the physical checks (relative).
+PHYSICAL_RTOL = 1e-6
 
 
 @dataclass(frozen=True)
 class LevelsStudy:
     """What a sample depends on besides the data and the FE model (hashed into the
     store's name): the data file, mode label, fit levels, force scale (N per excitation
-    unit, assumed), the case's name."""
+    unit, assumed), the case's name and the selected candidate (set by
+    :func:`run_fe_uncertainty`)."""
 
     data_path: str | None
     mode_label: int
     fit_levels: str
     force_scale: float = 1.0
     case: str = ""
+    candidate: str = ""
 
 
 @dataclass(frozen=True)
 class LevelsSweepInputs(SweepInputs):
     """:class:`inverse.uncertainty.SweepInputs` with the case's FE-levels builder
-    ``levels(data, force_scale=)`` (picklable)."""
+    ``levels(data, force_scale=)`` and the selected model's extension (None: the base
+    model); picklable."""
 
     levels: object = None
+    extension: object = None
 
 
-_CACHE: dict = {}      # per process: the FE-levels model and estimate of one sweep
+_CACHE: dict = {}      # per process: the FE-levels model of one sweep
 
 
 def _prepared(inputs: LevelsSweepInputs):
     key = (id(inputs), inputs.study)
     if _CACHE.get("key") != key:
-        st = inputs.study
-        est = estimate(inputs.data, fit_levels=parse_levels(st.fit_levels), method="exact")
-        _CACHE.update(key=key, est=est,
-                      fe=inputs.levels(inputs.data, force_scale=st.force_scale))
-    return _CACHE["fe"], _CACHE["est"]
+        _CACHE.update(key=key, fe=inputs.levels(inputs.data,
+                                                force_scale=inputs.study.force_scale))
+    return _CACHE["fe"]
 
 
-def simulate_levels(inputs: LevelsSweepInputs, p=None, ln_kt=None) -> dict:
-    """One sample (module docstring); ``p = ln_kt = None``: the estimate itself.
-    Returns ``frequency_hz``, ``zeta``, ``slip_over_phi_max`` (n_levels,) and ``chi``,
-    ``R``, ``phi_max``, ``zeta_viscous``."""
-    fe, est = _prepared(inputs)
-    chi, dc1 = (est.chi, est.kappa1_B) if p is None else (p - 1.0, math.exp(ln_kt) / p)
-    values = estimated_joint(chi, dc1, inputs.data.omega2[0], inputs.data.zeta[0])
+def physical_check(pred, values: dict, stiffens: bool = False) -> None:
+    """ValueError (one line, the first level that fails) unless prediction ``pred``
+    (:class:`cases.fe_loop.levels.LevelPrediction`) of parameter set ``values`` is
+    physical (module docstring)."""
+    fs, pm = pred.joint["F_S"], pred.joint["phi_max"]
+    if not (math.isfinite(fs) and fs > 0 and math.isfinite(pm) and pm > 0):
+        raise ValueError(f"no joint: strength F_S = {fs:.3g} N, phi_max = {pm:.3g} m")
+    f, z = pred.frequency_hz, pred.zeta
+    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(z))):
+        raise ValueError("a level's frequency or damping ratio is not finite")
+    if stiffens:
+        return
+    f0, zv = float(values["f0_hz"]), float(values["zeta_v"])
+    for i in range(f.size):
+        if f[i] > f0 * (1 + PHYSICAL_RTOL):
+            raise ValueError(f"level index {i}: frequency {f[i]:.6g} Hz above the "
+                             f"stuck-joint frequency {f0:.6g} Hz")
+        if z[i] < zv * (1 - PHYSICAL_RTOL):
+            raise ValueError(f"level index {i}: damping ratio {z[i]:.4g} below the "
+                             f"viscous one {zv:.4g}")
+
+
+def simulate_levels(inputs: LevelsSweepInputs, values: dict) -> dict:
+    """One sample (module docstring): the parameter set ``values`` simulated from a cold
+    start and checked. Returns ``frequency_hz``, ``zeta``, ``slip_over_phi_max``
+    (n_levels,) and ``chi``, ``R``, ``phi_max``, ``F_S``, ``zeta_viscous``, ``f0_hz``."""
+    fe = _prepared(inputs)
     fe.reset()             # no warm start: a sample's bits do not depend on the executor
-    pred = fe.predict(values)
+    ext = inputs.extension
+    pred = fe.predict(values, ext)
+    physical_check(pred, values, bool(getattr(ext, "stiffens", False)))
     return {"frequency_hz": pred.frequency_hz, "zeta": pred.zeta,
-            "slip_over_phi_max": pred.slip_over_phi_max, "chi": chi, "R": pred.joint["R"],
-            "phi_max": pred.joint["phi_max"], "zeta_viscous": values["zeta_v"]}
+            "slip_over_phi_max": pred.slip_over_phi_max, "chi": values["chi"],
+            "R": pred.joint["R"], "phi_max": pred.joint["phi_max"],
+            "F_S": pred.joint["F_S"], "zeta_viscous": values["zeta_v"],
+            "f0_hz": values["f0_hz"]}
 
 
 def _quantiles(rows, q) -> dict:
@@ -91,6 +127,21 @@ def _quantiles(rows, q) -> dict:
         return {"median": None, "lo": None, "hi": None}
     lo, med, hi = np.quantile(a, [q[0], 0.5, q[1]], axis=0)
     return {"median": med.tolist(), "lo": lo.tolist(), "hi": hi.tolist()}
+
+
+def _model(u: dict) -> dict:
+    """The nominal model (``update``'s result ``u``) and how far it misses its fit
+    levels."""
+    f, judged = u["fit"], u["selection"]["judged"]["selection"]
+    return {"candidate": u["candidate"], "cause": judged.cause,
+            "unexplained": judged.unexplained,
+            "fit_levels": [int(v) for v in u["data"].level[u["fit_mask"]]],
+            "values": dict(f.values), "free": list(f.free),
+            "at_bound": {n: f.at_bound.get(n, False) for n in f.free},
+            "std_error": {n: f.std_error(n) for n in f.free}, "chi2": f.chi2,
+            "n_residuals": f.n, "rms_misfit_sd": math.sqrt(f.chi2 / f.n),
+            "fit_test": fit_test_of(f, u["selection"]["judge_noise"]).to_json(),
+            "kind": "fitted", "rule": "cases.fe_loop.update.run_update"}
 
 
 def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
@@ -107,35 +158,35 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
 
     Returns
     -------
-    dict: ``estimate`` (chi with its t-interval, ``|kappa1| B``, dof), ``distribution``,
-    ``chi`` (quantiles of the admitted draws), ``levels`` (per level: ``held_out``,
-    measured, nominal, ``mc`` median/lo/hi of frequency (Hz) and zeta, whether the
-    measured value lies inside; None at level 1, matched by every sample),
-    ``n_failed`` and ``failures``, ``computed`` (samples not loaded from the store),
-    ``store``, ``timing_s``.
+    dict: ``model`` (the selected candidate, its fitted values, ``at_bound``, misfit in
+    noise sd and fit test), ``distribution``, ``chi`` (quantiles of the physical
+    samples), ``levels`` (per level: ``held_out``, measured, nominal, ``mc``
+    median/lo/hi of frequency (Hz) and zeta, whether the measured value lies inside),
+    ``n_failed`` and ``failures`` (with the reason), ``computed`` (samples not loaded
+    from the store), ``store``, ``timing_s``.
     """
     if not 0 < confidence < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
     if study.data_path is None:
         raise ValueError("no measured data: give FILE (the case names none)")
     t0 = time.perf_counter()
-    data = read_measured(study.data_path).for_mode(study.mode_label)
-    fit = parse_levels(study.fit_levels)
-    missing = sorted(set(fit) - set(map(int, data.level)))
-    if missing:
-        raise ValueError(f"--fit-levels: level(s) {missing} not in the data "
-                         f"(levels {list(map(int, data.level))})")
-    est = estimate(data, fit_levels=fit, method="exact", confidence=confidence)
-    dist = ParameterDistribution.from_fit(est.fit, distribution)
+    u = run_update(UpdateSettings(study.data_path, study.mode_label, study.fit_levels,
+                                  study.force_scale), levels, executor=executor,
+                   case_name=study.case)
+    data, mask, ext = u["data"], u["fit_mask"], u["extension"]
+    t_sel = time.perf_counter() - t0
+    dist = FitDistribution.from_fit(u["fit"], u["parameters"], distribution)
+    study = replace(study, candidate=u["candidate"])
     inputs = LevelsSweepInputs(model=model, data=data, study=study, distribution=dist,
-                               simulate=simulate_levels, levels=levels)
+                               simulate=simulate_levels, levels=levels, extension=ext)
     digest = sweep_hash(inputs, seed)
     store = None if out is None else SampleStore(
         Path(out) / f"samples-{digest[:12]}", digest,
         {"seed": seed, "distribution": distribution, "study": describe(study)})
     nominal, samples = run_samples(inputs, n_samples, seed, store, executor, progress)
     if nominal.status != "ok":
-        raise ValueError(f"the estimate's own joint could not be simulated ({nominal.status})")
+        raise ValueError(f"update's selected model ({u['candidate']}) is not physical at "
+                         f"its fit: {nominal.status}")
     ok = [s for s in samples if s.status == "ok"]
     q = (0.5 * (1 - confidence), 0.5 * (1 + confidence))
     mc_f = _quantiles([s.values["frequency_hz"] for s in ok], q)
@@ -143,24 +194,24 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     f_meas = np.sqrt(data.omega2) / (2 * math.pi)
     rows = []
     for i, lv in enumerate(data.level):
-        row = {"level": int(lv), "held_out": int(lv) not in fit,
+        row = {"level": int(lv), "held_out": bool(not mask[i]),
                "measured_frequency_hz": float(f_meas[i]), "measured_zeta": float(data.zeta[i]),
                "nominal_frequency_hz": float(nominal.values["frequency_hz"][i]),
                "nominal_zeta": float(nominal.values["zeta"][i])}
         for name, mc, meas in (("frequency_hz", mc_f, f_meas[i]), ("zeta", mc_z, data.zeta[i])):
             row[f"mc_{name}"] = {k: (None if v is None else v[i]) for k, v in mc.items()}
-            row[f"measured_{name}_inside"] = None if mc["lo"] is None or i == 0 else \
-                bool(mc["lo"][i] <= meas <= mc["hi"][i])      # level 1: matched (None)
+            row[f"measured_{name}_inside"] = None if mc["lo"] is None else \
+                bool(mc["lo"][i] <= meas <= mc["hi"][i])
         rows.append(row)
     chis = [float(s.values["chi"]) for s in ok]
+    draws = sum(s.n_draws for s in samples)
     return {
         "case": study.case, "source": str(study.data_path), "mode": study.mode_label,
         "route": "exact describing function, phase resonance (FE-levels model)",
-        "estimate": {"chi": est.chi, "chi_interval": list(est.chi_interval),
-                     "kappa1_B": est.kappa1_B, "dof": est.dof, "method": "exact",
-                     "fit_levels": list(fit), "kind": "fitted"},
-        "distribution": dist.to_dict(), "n_samples": int(n_samples), "seed": int(seed),
-        "confidence": confidence,
+        "model": _model(u),
+        "distribution": {**dist.to_dict(),
+                         "kept_fraction": len(samples) / draws if draws else None},
+        "n_samples": int(n_samples), "seed": int(seed), "confidence": confidence,
         "chi": {"median": float(np.median(chis)), "lo": float(np.quantile(chis, q[0])),
                 "hi": float(np.quantile(chis, q[1]))} if chis else None,
         "levels": rows, "n_failed": len(samples) - len(ok),
@@ -169,4 +220,4 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
         "store": None if store is None else str(store.path),
         "executor": executor.describe() if isinstance(executor, ExecutorSpec) else str(executor),
         "computed": sum(not s.loaded for s in [nominal, *samples]),
-        "timing_s": {"total": time.perf_counter() - t0}}
+        "timing_s": {"model choice (as update)": t_sel, "total": time.perf_counter() - t0}}

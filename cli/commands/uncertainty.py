@@ -7,9 +7,11 @@ the nominal FE prediction, the sample median and central interval. A case with i
 ``uncertainty`` capability (the double beam: a harmonic-balance stepped sine and modal
 filter per sample, with the estimator's closed-form interval beside,
 :mod:`cases.double_beam.uncertainty`) runs that; any other case with an FE-levels model
-(a case file with iwan4 joints) runs :mod:`cases.fe_loop.uncertainty` (exact describing
-function at phase resonance). Every finished sample is stored under ``--out``; a rerun
-computes only the missing ones.
+(a case file with iwan4 joints) runs :mod:`cases.fe_loop.uncertainty` instead: the
+parameters of the model ``update`` selects for the same levels drawn from its fit (the
+nominal is ``update``'s model; unphysical samples counted failed), each simulated by
+exact describing function at phase resonance. Every finished sample is stored under
+``--out``; a rerun computes only the missing ones.
 """
 from __future__ import annotations
 
@@ -43,8 +45,11 @@ def register(subparsers) -> None:
             "levels, and report per level the measured value, the nominal FE prediction, "
             "the sample median and central interval. The double beam: harmonic-balance "
             "stepped sine and modal filter per sample, beside the estimator's closed-form "
-            "delta-method interval (paper eq. 43, 46); a case file: exact describing "
-            "function at phase resonance (its FE-levels model, ms per sample). "
+            "delta-method interval (paper eq. 43, 46). A case file: the parameters of the "
+            "model 'update' selects for the same levels, drawn from that fit (its nominal "
+            "is update's model; samples that fail or are not physical are counted failed "
+            "with the reason), each simulated by exact describing function at phase "
+            "resonance (its FE-levels model, ms per sample). "
             "Writes uncertainty.json (and for the double beam uncertainty.png) under --out "
             "and stores every "
             "finished sample there: a rerun computes only the missing ones, and more "

@@ -1,6 +1,7 @@
 """``iwanfe uncertainty --case FILE``: the Monte Carlo of a case's FE-levels model
-(:mod:`cases.fe_loop.uncertainty`: exact describing function at phase resonance per
-sample), for a case without its own ``uncertainty`` study; options, text and files."""
+over ``update``'s selected model (:mod:`cases.fe_loop.uncertainty`: exact describing
+function at phase resonance per sample), for a case without its own ``uncertainty``
+study; options, text and files."""
 from __future__ import annotations
 
 import json
@@ -19,18 +20,29 @@ def _f(x, spec):
 
 def text(r: dict) -> str:
     """The readable report of :func:`cases.fe_loop.uncertainty.run_fe_uncertainty`."""
-    e, c = r["estimate"], r["confidence"]
+    m, c, dist = r["model"], r["confidence"], r["distribution"]
     lo, hi = (100 * (1 - c) / 2, 100 * (1 + c) / 2)
     ch = r["chi"] or {"median": math.nan, "lo": math.nan, "hi": math.nan}
-    lines = [f"iwanfe uncertainty {r['source']}  case {r['case']}  mode {r['mode']}  exact "
-             f"estimate of levels {e['fit_levels']}",
-             f"  chi = {e['chi']:.4f} (fitted; t-interval {e['chi_interval'][0]:.3f} .. "
-             f"{e['chi_interval'][1]:.3f}), |kappa1|B = {e['kappa1_B']:.4g} 1/s^2, "
-             f"{e['dof']} dof",
-             f"  {r['n_samples']} samples, seed {r['seed']}, {r['distribution']['kind']} "
-             f"truncated to -1 < chi < 0 ({100 * r['distribution']['admissible_fraction']:.1f}"
-             f" % of the mass): chi median {ch['median']:.4f}, {lo:g}..{hi:g} % "
-             f"{ch['lo']:.4f} .. {ch['hi']:.4f}; {r['n_failed']} failed",
+    ft = m["fit_test"]
+    held = [n for n, b in m["at_bound"].items() if b]
+    sd = dict(zip(dist["parameters"], dist["sd"]))
+    kept = dist["kept_fraction"]
+    lines = [f"iwanfe uncertainty {r['source']}  case {r['case']}  mode {r['mode']}  "
+             f"fit levels {m['fit_levels']}",
+             f"  nominal: update's selected model '{m['candidate']}' (cause "
+             f"{'unexplained' if m['unexplained'] else m['cause']}) with its fitted "
+             f"parameters ({m['rule']})",
+             f"  it misses its fit levels by {m['rms_misfit_sd']:.3g} noise sd rms "
+             f"(chi2 = {m['chi2']:.4g} on {m['n_residuals']} residuals; fit test p = "
+             f"{_f(ft.get('p_value'), '.2g')}, {ft.get('test', '')})",
+             "  drawn: " + ", ".join(f"{n} = {m['values'][n]:.6g} +- {sd[n]:.3g}"
+                                     for n in dist["parameters"])
+             + (f"; held at a bound: {', '.join(held)}" if held else ""),
+             f"  {r['n_samples']} samples, seed {r['seed']}, {dist['kind']} truncated to the "
+             f"parameters' bounds ({_f(None if kept is None else 100 * kept, '.1f')} % of "
+             f"the draws kept): chi median {ch['median']:.4f}, {lo:g}..{hi:g} % "
+             f"{ch['lo']:.4f} .. {ch['hi']:.4f}; {r['n_failed']} failed (not physical or "
+             f"not simulated; left out of the quantiles)",
              f"  per sample: {r['route']}", ""]
     head = f" level     measured      nominal    MC median  {'MC %g..%g %%' % (lo, hi):^26s}  in"
     for name, key, scale, spec in (("natural frequency (Hz)", "frequency_hz", 1.0, "10.4f"),
@@ -42,7 +54,7 @@ def text(r: dict) -> str:
             lines.append(f" {row['level']:>4}{'*' if row['held_out'] else ' '} "
                          f"{s(row[f'measured_{key}'])}  {s(row[f'nominal_{key}'])}  "
                          f"{s(mc['median'])}  {s(mc['lo'])} .. {s(mc['hi'])}  "
-                         + {True: "yes", False: "no", None: "matched"}[
+                         + {True: "yes", False: "no", None: "n/a"}[
                              row[f"measured_{key}_inside"]])
         lines.append("")
     for f in r["failures"][:5]:
@@ -68,8 +80,8 @@ def run_levels(args, case) -> int:
     out = validate.output_dir(args.out, "--out")
     progress = not args.no_progress
     if progress:
-        print(f"iwanfe uncertainty: {args.samples} samples + nominal, store under {out}",
-              file=sys.stderr)
+        print(f"iwanfe uncertainty: the model choice of update, then {args.samples} samples "
+              f"+ nominal, store under {out}", file=sys.stderr)
     r = uncertainty(data_path=data, mode_label=args.mode, fit_levels=args.fit_levels,
                     force_scale=force_scale, n_samples=args.samples, seed=args.seed,
                     confidence=args.confidence, distribution=args.distribution, out=out,
