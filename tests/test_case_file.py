@@ -132,7 +132,9 @@ def test_double_beam_case_file_equals_its_python_model():
     np.testing.assert_allclose(model.joint_stiffness, ref.joint_stiffness, rtol=1e-14)
     w, _ = model.modes(10)
     w_ref, _ = ref.modes(10)
-    np.testing.assert_allclose(w, w_ref, rtol=2e-7)   # the grip rounded to 7 digits in the Python model
+    # the grip rounded to 7 digits in the Python model (1e-7), and round-off: the 62.56 Hz
+    # mode of either model moves by up to 8e-7 between shift-invert shifts -1 .. -1e6
+    np.testing.assert_allclose(w, w_ref, rtol=2e-6)
 
 
 def test_cantilever_lap_case_from_the_spec_runs_the_face():
@@ -160,7 +162,10 @@ def test_convergence_against_the_finest_mesh_is_reached_at_the_coarsest():
 
     r = case_convergence(resolve_case("docs/case-files/bolted-lap-cantilever.toml"), levels=4)
     change = np.array(r["relative_change_vs_finest"])
-    assert np.all(change[:-1] < 2e-5) and np.all(change[-1] == 0.0)
+    # the 14 Hz mode's frequency at 0.625 mm is round-off limited (two shifts: 5e-5)
+    noise = 10 * np.maximum(r["roundoff_estimate"][:-1], r["roundoff_estimate"][-1])
+    assert np.all((change[:-1] < 2e-5) | (change[:-1] < noise)) and np.all(change[-1] == 0.0)
+    assert not [w for w in r["warnings"] if w.startswith("WARNING")]
     assert r["element_size_m"] == [0.005, 0.0025, 0.00125, 0.000625]
 
 
@@ -222,3 +227,28 @@ def test_air_drag_integral_counts_a_lap_once():
             parts.append(np.trapezoid(w3, x))
             laps.append(np.trapezoid(w3[on], x[on]))
         assert _lambda3(model, phi) == pytest.approx(sum(parts) - min(laps), rel=1e-6)
+
+
+def test_convergence_warns_on_a_spectrum_that_does_not_converge():
+    """Planted sequences: an h^4 sequence passes; the outside user's lap whose steps grew
+    (213.9448, 213.9422, 213.9385, 213.9321 Hz at 4, 1, 0.5, 0.25 mm) and a mode that
+    jumped (634.40, 634.40, 635.18, 634.40 Hz) are warned about; changes at round-off are
+    noted as converged."""
+    from cases.case_convergence import convergence_warnings
+
+    def report(f, roundoff=1e-10):
+        f = np.asarray(f, float)[:, None]
+        change = np.abs(f / f[-1] - 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return convergence_warnings(change, np.log2(change[-3] / change[-2]),
+                                        np.full(f.shape, roundoff), [0.004, 0.002, 0.001, 0.0005])
+
+    h = 0.004 / 2.0 ** np.arange(4)
+    assert report(100.0 * (1 + (h / 0.1) ** 4)) == []
+    for bad in ([213.9448, 213.9422, 213.9385, 213.9321], [634.40, 634.40, 635.18, 634.40]):
+        w = report(bad)
+        assert len(w) == 1 and w[0].startswith("WARNING mode 1: does not converge")
+    (note,) = report([634.39590, 634.39591, 634.39589, 634.39590], roundoff=1e-7)
+    assert "round-off" in note and not note.startswith("WARNING")
+    (w,) = report([634.40, 634.40, 661.18, 634.40], roundoff=0.04)   # two shifts disagree
+    assert w.startswith("WARNING mode 1: two eigen-solutions differ by 4.0e-02")

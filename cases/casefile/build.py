@@ -13,14 +13,20 @@ range, so two stacked beams share their nodes over an interface. Each beam's ref
   ``b l / (h_bot/(2 E_bot) + h_top/(2 E_top))`` (the two half-thicknesses in series
   through the interface, ``l`` the node's tributary length in the interface, ``b`` the
   narrower width): stiff, bilateral contact; and, as a gap that stays zero along the
-  contact has zero slope, a penalty :data:`TIED_PENALTY` times that stiffness times
-  ``((h_bot + h_top)/2)^2`` on ``theta_top - theta_bot`` (springs on ``w`` at the nodes
-  alone leave the two Hermite layers free to turn against each other at a node: a
-  section change at a lap end then acts as a hinge, 2.4 % low on a lap whose stuck joints
-  are 1e3 times stiffer than the layers, at every mesh size;
-  tests/test_case_file_interfaces.py);
-* ``tangential = "tied"``: bonded, one plane section: :data:`TIED_PENALTY` times the
-  normal stiffness on the slip, and the rotation tie above;
+  contact has zero slope, a penalty on ``theta_top - theta_bot`` of :data:`TIED_PENALTY`
+  times the layers' rotational stiffness at the node, ``sum (EI_bot + EI_top) / l_e`` over
+  its interface elements (springs on ``w`` at the nodes alone leave the two Hermite layers
+  free to turn against each other at a node: a section change at a lap end then acts as
+  a hinge, 2.4 % low on a lap whose stuck joints are 1e3 times stiffer than the layers,
+  at every mesh size; tests/test_case_file_interfaces.py);
+* ``tangential = "tied"``: bonded, one plane section: a penalty on the slip of
+  :data:`TIED_PENALTY` times the layers' axial stiffness at the node, ``sum (EA_bot +
+  EA_top) / l_e``, and the rotation tie above.
+  Both penalties are relative to the elements they tie, so they are as strong on every
+  mesh (a penalty per unit length, fixed, is ``(l / h)^2`` weaker against the layers on
+  a finer mesh: its boundary layer at the lap ends, 70 um for the rotation tie of two 8 mm
+  strips, was resolved more and more, and a lap's first mode drifted by 3e-5 from 4 to
+  0.25 mm with growing steps; tests/test_case_file_interfaces.py);
   ``"free"``: nothing (frictionless); ``"joint"``: joint elements on the slip
   ``s = (u_top + lever_top theta_top) - (u_bot - lever_bot theta_bot)`` at ``joints_at``
   (equal shares of ``kt``) or at ``joint_elements`` evenly spaced positions (trapezoidal
@@ -50,9 +56,9 @@ NODE_TOLERANCE = 1e-9  # m: x values closer than this are one node
 #: joint element has a bending stiffness ~1e18 N/m, 1e15 times a 5 mm element's, and the
 #: free-free stiffness matrix's rigid-body modes drown in round-off (a Cholesky failure)
 SNAP_FRACTION = 0.1
-#: a tied tangential contact: this many times the through-thickness stiffness (a penalty
-#: for "no slip"; 1e3 keeps K well conditioned, the tied lap then equals the monolithic
-#: beam to the mesh error, tests/test_case_file.py)
+#: a tied contact: this many times the layers' own stiffness at a node (a penalty for "no
+#: slip" and "no relative rotation"; 1e3 keeps K well conditioned, the tied lap then
+#: equals the monolithic beam to the mesh error, tests/test_case_file.py)
 TIED_PENALTY = 1.0e3
 
 
@@ -198,6 +204,16 @@ def _interface_springs(cf, itf, nodes: _Nodes):
     return n_lo, n_up, k
 
 
+def _tie_stiffness(nodes: _Nodes, lo: str, up: str, n_lo, n_up, key: str) -> np.ndarray:
+    """Per interface node, ``sum (S_lo + S_up) / l_e`` over its interface elements, ``S``
+    the strips' ``EI`` (N m^2: a rotational stiffness, N m/rad) or ``EA`` (N: N/m)."""
+    s_lo, s_up = nodes.strips[lo], nodes.strips[up]
+    e_lo, e_up = np.asarray(n_lo)[:-1], np.asarray(n_up)[:-1]     # element = its left node
+    per = ((getattr(s_lo, key)[e_lo] + getattr(s_up, key)[e_up])
+           / (s_lo.x[e_lo + 1] - s_lo.x[e_lo]))
+    return np.concatenate([per, [0.0]]) + np.concatenate([[0.0], per])
+
+
 def build_model(cf) -> BuiltCase:
     """Assemble the case file's linear model (module docstring)."""
     x_all = node_positions(cf)
@@ -226,7 +242,6 @@ def build_model(cf) -> BuiltCase:
         lo_b, up_b = (cf.beam(n) for n in itf.beams)
         xm = 0.5 * (itf.x[0] + itf.x[1])
         h_lo, z_lo, _ = lo_b.section_at(xm)
-        h_up = up_b.section_at(xm)[0]
         z_i = z_lo + 0.5 * h_lo
         lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
         m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
@@ -236,13 +251,15 @@ def build_model(cf) -> BuiltCase:
             normal_rows.append(G)
             normal_k.append(k)
         if itf.tangential == "tied":
+            k_slip = _tie_stiffness(nodes, lo_b.name, up_b.name, n_lo, n_up, "EA")
             couplings.append((interface_rows(m_up, m_lo, n_up, n_lo, nodes.n, lever_up, lever_lo),
-                              TIED_PENALTY * k))
+                              TIED_PENALTY * k_slip))
         if "tied" in (itf.normal, itf.tangential):
             # the gap w_top - w_bot is zero along the contact, so is its slope
             rot = coupling_rows(np.column_stack([m_up.dof(n_up, THETA), m_lo.dof(n_lo, THETA)]),
                                 [1.0, -1.0], nodes.n)
-            couplings.append((rot, TIED_PENALTY * k * (0.5 * (h_lo + h_up)) ** 2))
+            k_rot = _tie_stiffness(nodes, lo_b.name, up_b.name, n_lo, n_up, "EI")
+            couplings.append((rot, TIED_PENALTY * k_rot))
         if itf.tangential == "joint":
             xj = joint_positions(itf)
             kj = itf.kt * joint_shares(itf)
