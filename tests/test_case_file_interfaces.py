@@ -216,3 +216,56 @@ def test_open_lap_spectrum_is_the_same_on_every_mesh(tmp_path):
     for f in meshes:
         assert np.sum(f < 1.0) == 5
         np.testing.assert_allclose(f[5:7], meshes[0][5:7], rtol=1e-6)
+
+
+GLUED_STACK = """[case]
+name = "glued-steel-freefree"
+[[material]]
+name = "steel"
+E = 210e9
+rho = 7850.0
+[[beam]]
+name = "bottom"
+material = "steel"
+x = [0.0, 0.400]
+width = 0.020
+thickness = 0.004
+[[beam]]
+name = "top"
+material = "steel"
+x = [0.0, 0.400]
+width = 0.020
+thickness = 0.004
+z = 0.004
+[[interface]]
+beams = ["bottom", "top"]
+x = [0.0, 0.400]
+normal = "tied"
+tangential = "joint"
+joint_elements = 5
+law = "iwan4"
+kt = {kt}
+[mesh]
+element_size = 0.005
+"""
+
+
+def test_very_stiff_glue_gives_the_stiff_limit_or_one_line_naming_kt(tmp_path):
+    """An outside user's glued steel stack: kt = 1e16 N/m failed with a bare Cholesky
+    error (484-th leading minor). Truth: the stiff limit, which kt = 1e15 reaches to 1e-6
+    (the frequencies move as the glue-slip share, 1e-7 at 1e15, which falls as 1/kt); kt = 1e18 (a joint element 7e7 times the stiffest
+    strip element) is refused in one line naming [interface.0] kt."""
+    def modes(kt):
+        p = tmp_path / f"glued-{kt:g}.toml"
+        p.write_text(GLUED_STACK.format(kt=kt))
+        model = build_model(read_case_file(p)).model
+        omega, shapes = model.modes(8)
+        return omega / (2 * np.pi), model.glue_slip_participation(shapes[:, 3])
+
+    f15, p15 = modes(1e15)
+    f16, p16 = modes(1e16)
+    assert np.all(f16[:3] < 1.0) and np.all(f15[:3] < 1.0)        # 3 rigid-body modes
+    np.testing.assert_allclose(f16[3:], f15[3:], rtol=1e-6)
+    assert p16 == pytest.approx(p15 / 10, rel=1e-2)
+    with pytest.raises(CaseFileError, match=r"\[interface\.0\] kt: 1e\+18 N/m .* 7\.4e\+07 times"):
+        modes(1e18)

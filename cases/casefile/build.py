@@ -31,7 +31,8 @@ range, so two stacked beams share their nodes over an interface. Each beam's ref
   ``s = (u_top + lever_top theta_top) - (u_bot - lever_bot theta_bot)`` at ``joints_at``
   (equal shares of ``kt``) or at ``joint_elements`` evenly spaced positions (trapezoidal
   shares ``k_j = kt w_j / sum w``, ``w`` the trapezoidal weights of the positions), so
-  ``sum k_j = kt``.
+  ``sum k_j = kt``; a joint element over :data:`MAX_JOINT_STIFFNESS_RATIO` times the
+  stiffest strip element of its interface is refused (one line naming ``kt``).
 
 Supports: ``clamp`` fixes every DOF of the nodes in ``[x0, x1]``, ``pin`` fixes ``u, w``,
 ``spring`` adds grounded springs ``k_u, k_w, k_theta``. Point masses (and sensor masses)
@@ -60,6 +61,12 @@ SNAP_FRACTION = 0.1
 #: slip" and "no relative rotation"; 1e3 keeps K well conditioned, the tied lap then
 #: equals the monolithic beam to the mesh error, tests/test_case_file.py)
 TIED_PENALTY = 1.0e3
+#: a joint element at most this many times stiffer than the stiffest strip element of its
+#: interface (axial ``EA/l``): a glued stack (0.4 m steel strips, 5 mm elements, 5 joint
+#: elements) gives the same modes from kt = 1e12 to 1e17 N/m (ratio 7e6; glue slip
+#: falling as 1/kt), at 1e18 (7e7) the Cholesky factor of ``K + M`` fails, at 1e20 a
+#: rigid-body mode comes out at 51 Hz
+MAX_JOINT_STIFFNESS_RATIO = 1.0e7
 
 
 @dataclass
@@ -214,6 +221,20 @@ def _tie_stiffness(nodes: _Nodes, lo: str, up: str, n_lo, n_up, key: str) -> np.
     return np.concatenate([per, [0.0]]) + np.concatenate([[0.0], per])
 
 
+def _check_joint_stiffness(cf, i: int, k_max: float, *strips) -> None:
+    """Refuse a joint element stiffer than :data:`MAX_JOINT_STIFFNESS_RATIO` times the
+    stiffest strip element of its interface (one line naming ``[interface.i] kt``)."""
+    ea_l = max(float(np.max(s.EA / np.diff(s.x))) for s in strips)
+    if k_max > MAX_JOINT_STIFFNESS_RATIO * ea_l:
+        kt = cf.interfaces[i].kt
+        raise CaseFileError(
+            f"{cf.path}: [interface.{i}] kt: {kt:g} N/m puts {k_max:.3g} N/m on one joint "
+            f"element, {k_max / ea_l:.2g} times the stiffest strip element (EA/l = "
+            f"{ea_l:.3g} N/m); above {MAX_JOINT_STIFFNESS_RATIO:g} times the modes drown in "
+            f"round-off: give kt <= {kt * MAX_JOINT_STIFFNESS_RATIO * ea_l / k_max:.3g} N/m "
+            f"(stuck joints that stiff act as a bond: tangential = \"tied\")")
+
+
 def build_model(cf) -> BuiltCase:
     """Assemble the case file's linear model (module docstring)."""
     x_all = node_positions(cf)
@@ -263,6 +284,8 @@ def build_model(cf) -> BuiltCase:
         if itf.tangential == "joint":
             xj = joint_positions(itf)
             kj = itf.kt * joint_shares(itf)
+            _check_joint_stiffness(cf, i, float(np.max(kj)), nodes.strips[lo_b.name],
+                                   nodes.strips[up_b.name])
             jn_lo = [nodes.node(lo_b.name, v) for v in xj]
             jn_up = [nodes.node(up_b.name, v) for v in xj]
             xj = nodes.strips[lo_b.name].x[jn_lo]      # a snapped joint sits at its node
