@@ -21,18 +21,19 @@ range, so two stacked beams share their nodes over an interface. Each beam's ref
   at every mesh size; tests/test_case_file_interfaces.py);
 * ``tangential = "tied"``: bonded, one plane section: a penalty on the slip of
   :data:`TIED_PENALTY` times the layers' axial stiffness at the node, ``sum (EA_bot +
-  EA_top) / l_e``, and the rotation tie above.
-  Both penalties are relative to the elements they tie, so they are as strong on every
-  mesh (a penalty per unit length, fixed, is ``(l / h)^2`` weaker against the layers on
-  a finer mesh: its boundary layer at the lap ends, 70 um for the rotation tie of two 8 mm
-  strips, was resolved more and more, and a lap's first mode drifted by 3e-5 from 4 to
-  0.25 mm with growing steps; tests/test_case_file_interfaces.py);
-  ``"free"``: nothing (frictionless); ``"joint"``: joint elements on the slip
+  EA_top) / l_e``, and the rotation tie above; ``"free"``: nothing (frictionless);
+* ``tangential = "joint"``: joint elements on the slip
   ``s = (u_top + lever_top theta_top) - (u_bot - lever_bot theta_bot)`` at ``joints_at``
   (equal shares of ``kt``) or at ``joint_elements`` evenly spaced positions (trapezoidal
   shares ``k_j = kt w_j / sum w``, ``w`` the trapezoidal weights of the positions), so
   ``sum k_j = kt``; a joint element over :data:`MAX_JOINT_STIFFNESS_RATIO` times the
   stiffest strip element of its interface is refused (one line naming ``kt``).
+
+Both tie penalties are relative to the elements they tie, so they are as strong on every
+mesh. A penalty fixed per unit length weakens against the elements as ``l_e^2``: its
+boundary layer at the lap ends (70 um for the rotation tie of two 8 mm strips) was resolved
+more and more, and a lap's first mode drifted by 3e-5 from 4 to 0.25 mm elements with
+growing steps (tests/test_case_file_interfaces.py).
 
 Supports: ``clamp`` fixes every DOF of the nodes in ``[x0, x1]``, ``pin`` fixes ``u, w``,
 ``spring`` adds grounded springs ``k_u, k_w, k_theta``. Point masses (and sensor masses)
