@@ -102,8 +102,9 @@ def _sparse_modes(K, M, n_modes: int, sigma: float | None):
     scale ``lambda_e`` of the lowest elastic eigenvalue (above 1e-6 of the highest found,
     which the rigid-body modes' round-off stays below; Ritz values bound the true ones
     from above) and, unless ``lambda_e`` is within a factor 10 of 1, the solve is repeated
-    at ``sigma = -lambda_e`` (error ratio ``~ eps lambda_max / lambda_e``). Deterministic
-    (fixed start vector). Returns ``(lambda, phi)`` unsorted."""
+    at ``sigma = -lambda_e`` (error ratio ``~ eps lambda_max / lambda_e``); then a
+    Rayleigh-Ritz step on the vectors found. Deterministic (fixed start vector). Returns
+    ``(lambda, phi)`` ascending."""
     v0 = np.random.default_rng(START_SEED).standard_normal(K.shape[0])
     shift = -1.0 if sigma is None else float(sigma)
     lam, phi = spla.eigsh(K, k=n_modes, M=M, sigma=shift, which="LM", v0=v0)
@@ -111,7 +112,13 @@ def _sparse_modes(K, M, n_modes: int, sigma: float | None):
     elastic = lam[lam > 1e-6 * top]
     if sigma is None and top > 0.0 and not 0.1 < np.min(elastic) < 10.0:
         lam, phi = spla.eigsh(K, k=n_modes, M=M, sigma=-float(np.min(elastic)), which="LM", v0=v0)
-    return lam, phi
+    # Rayleigh-Ritz on the vectors found: on a 0.25 mm free-free lap the rigid-body modes
+    # come back within 0.2 Hz of zero (1.4 Hz without) and its 214 Hz mode within 1e-7 of
+    # the finer meshes' (2e-5 off without); a 14.8 Hz mode of a clamped lap at 0.625 mm
+    # moves by 1e-6 instead of 6e-5 under 25 um moves of the clamp
+    Kp, Mp = phi.T @ (K @ phi), phi.T @ (M @ phi)
+    lam, v = la.eigh(0.5 * (Kp + Kp.T), 0.5 * (Mp + Mp.T))
+    return lam, phi @ v
 
 
 def modal_damping_ratios(omega_n, zeta=None, proportional=None) -> np.ndarray:
