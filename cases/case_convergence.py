@@ -4,17 +4,30 @@ The case's element size is halved ``levels - 1`` times (no finer than
 :func:`cases.mode_report.min_element_size`); the first elastic modes of every mesh are
 compared with the finest mesh's (no closed form exists for a jointed assembly), with the
 observed rate ``log2(e_k / e_{k+1})`` of the last two coarse meshes (4 expected for the
-cubic Hermite element). Calibrated parameters are re-calibrated on each mesh. Hz.
+cubic Hermite element, 2 where the axial bar elements take part, as in a jointed lap).
+Calibrated parameters are re-calibrated on each mesh. Hz. A mode whose change does not
+fall steadily under refinement (a negative, missing or below-1 rate, or a change that
+grows) is warned about (:func:`convergence_warnings`): a spectrum that does not converge
+is a defect of the model or of the solver, not a result.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from cases.mode_report import min_element_size
+from fe.modal import normal_modes
+
+#: a change counts as mesh (truncation) error when above this many times the round-off
+ROUNDOFF_MARGIN = 10.0
+#: two shifts disagreeing by more than this (relative): the eigen-solution is unreliable
+ROUNDOFF_LIMIT = 1e-4
 
 
 def case_convergence(case, levels: int = 4, n_modes: int = 6) -> dict:
-    """Frequencies per mesh, their relative change against the finest, observed rates."""
+    """Frequencies per mesh, their relative change against the finest, observed rates, the
+    round-off estimate of each frequency (relative change when the eigen-solution is
+    repeated at another shift, ``-4 lambda_e``: a differently conditioned factorization)
+    and the warnings of :func:`convergence_warnings`."""
     cf = case.file
     length = max(b.x[1] - b.x[0] for b in cf.beams)
     sizes = [cf.element_size / 2**k for k in range(levels)]
@@ -22,21 +35,65 @@ def case_convergence(case, levels: int = 4, n_modes: int = 6) -> dict:
     if len(sizes) < 3:
         raise ValueError(f"case {case.name!r}: element size {cf.element_size:g} m leaves fewer "
                          f"than 3 meshes above the round-off limit")
-    freqs, dofs = [], []
+    freqs, again, dofs = [], [], []
     for h in sizes:
         model = case.fe_model(element_size=h)
         omega, _ = model.modes(n_modes + 3)
-        elastic = omega[omega > 1e-3 * omega.max()][:n_modes]
-        freqs.append(elastic / (2 * np.pi))
+        is_elastic = omega > 1e-3 * omega.max()
+        shift = -4.0 * float(omega[is_elastic][0]) ** 2
+        other, _ = normal_modes(model.K, model.M, min(n_modes + 3, model.n_free - 2), sigma=shift)
+        freqs.append(omega[is_elastic][:n_modes] / (2 * np.pi))
+        again.append(other[is_elastic][:n_modes] / (2 * np.pi))
         dofs.append(model.n_free)
     n = min(len(f) for f in freqs)
     F = np.array([f[:n] for f in freqs])
+    roundoff = np.abs(np.array([f[:n] for f in again]) / F - 1)
     change = np.abs(F / F[-1] - 1)
     with np.errstate(divide="ignore", invalid="ignore"):
         rate = np.log2(change[-3] / change[-2])
     return {"case": case.name, "element_size_m": sizes, "n_free_dofs": dofs,
             "frequency_hz": F.tolist(), "relative_change_vs_finest": change.tolist(),
-            "rate": rate.tolist(), "reference": "the finest mesh (no closed form)"}
+            "roundoff_estimate": roundoff.tolist(),
+            "rate": rate.tolist(), "reference": "the finest mesh (no closed form)",
+            "warnings": convergence_warnings(change, rate, roundoff, sizes)}
+
+
+def convergence_warnings(change, rate, roundoff, sizes) -> list[str]:
+    """One line per mode that does not converge, or converges to round-off.
+
+    ``change`` (n_meshes, n_modes): relative change against the finest mesh (coarsest
+    first); ``rate`` the observed rate per mode; ``roundoff`` the round-off estimate of
+    each frequency; ``sizes`` the element sizes (m). A mode is warned about (``WARNING``)
+    when two shifts disagree by more than :data:`ROUNDOFF_LIMIT` on a mesh (the
+    eigen-solution is unreliable there), or when its changes above round-off (more than
+    :data:`ROUNDOFF_MARGIN` times the larger round-off of the mesh and the finest) do not
+    fall at every refinement or fall slower than rate 1 (the cubic element gives 4, the
+    axial bar 2). A mode whose changes are all within round-off is noted as converged.
+    """
+    change, roundoff = np.asarray(change, float), np.asarray(roundoff, float)
+    out = []
+    for j in range(change.shape[1]):
+        c, r = change[:-1, j], roundoff[:, j]
+        noise = ROUNDOFF_MARGIN * np.maximum(r[:-1], r[-1])
+        head = f"WARNING mode {j + 1}: "
+        if np.max(r) > ROUNDOFF_LIMIT:
+            k = int(np.argmax(r))
+            out.append(head + f"two eigen-solutions differ by {r[k]:.1e} at {1e3 * sizes[k]:g} mm "
+                       f"elements: round-off, not mesh error; do not trust its frequency")
+            continue
+        resolved = c > noise
+        if not resolved.any():
+            out.append(f"mode {j + 1}: changes within round-off ({np.max(noise):.1e}) on every "
+                       f"mesh: converged, its rate {rate[j]:.2f} means nothing")
+            continue
+        cr = c[resolved]
+        steady = resolved[:cr.size].all() and np.all(np.diff(cr) < 0)
+        fit = np.log2(cr[-2] / cr[-1]) if cr.size > 1 else np.inf
+        if not (steady and fit >= 1.0):
+            out.append(head + f"does not converge (rate {rate[j]:.2f}, expected 2 to 4; changes "
+                       + ", ".join(f"{v:.1e}" for v in c) + "): the model depends on the "
+                       "mesh; do not trust its frequency")
+    return out
 
 
 def format_case_convergence(r: dict) -> str:
@@ -49,4 +106,5 @@ def format_case_convergence(r: dict) -> str:
         lines.append(f"{1e3 * h:8.3f} {d:6d} " + " ".join(f"{v:12.4f}" for v in f))
         lines.append(f"{'':8} {'':6} " + " ".join(f"{v:12.2e}" for v in c))
     lines.append(f"{'rate':>15} " + " ".join(f"{v:12.2f}" for v in r["rate"]))
+    lines += r["warnings"]
     return "\n".join(lines)

@@ -13,19 +13,27 @@ range, so two stacked beams share their nodes over an interface. Each beam's ref
   ``b l / (h_bot/(2 E_bot) + h_top/(2 E_top))`` (the two half-thicknesses in series
   through the interface, ``l`` the node's tributary length in the interface, ``b`` the
   narrower width): stiff, bilateral contact; and, as a gap that stays zero along the
-  contact has zero slope, a penalty :data:`TIED_PENALTY` times that stiffness times
-  ``((h_bot + h_top)/2)^2`` on ``theta_top - theta_bot`` (springs on ``w`` at the nodes
-  alone leave the two Hermite layers free to turn against each other at a node: a
-  section change at a lap end then acts as a hinge, 2.4 % low on a lap whose stuck joints
-  are 1e3 times stiffer than the layers, at every mesh size;
-  tests/test_case_file_interfaces.py);
-* ``tangential = "tied"``: bonded, one plane section: :data:`TIED_PENALTY` times the
-  normal stiffness on the slip, and the rotation tie above;
-  ``"free"``: nothing (frictionless); ``"joint"``: joint elements on the slip
+  contact has zero slope, a penalty on ``theta_top - theta_bot`` of :data:`TIED_PENALTY`
+  times the layers' rotational stiffness at the node, ``sum (EI_bot + EI_top) / l_e`` over
+  its interface elements (springs on ``w`` at the nodes alone leave the two Hermite layers
+  free to turn against each other at a node: a section change at a lap end then acts as
+  a hinge, 2.4 % low on a lap whose stuck joints are 1e3 times stiffer than the layers,
+  at every mesh size; tests/test_case_file_interfaces.py);
+* ``tangential = "tied"``: bonded, one plane section: a penalty on the slip of
+  :data:`TIED_PENALTY` times the layers' axial stiffness at the node, ``sum (EA_bot +
+  EA_top) / l_e``, and the rotation tie above; ``"free"``: nothing (frictionless);
+* ``tangential = "joint"``: joint elements on the slip
   ``s = (u_top + lever_top theta_top) - (u_bot - lever_bot theta_bot)`` at ``joints_at``
   (equal shares of ``kt``) or at ``joint_elements`` evenly spaced positions (trapezoidal
   shares ``k_j = kt w_j / sum w``, ``w`` the trapezoidal weights of the positions), so
-  ``sum k_j = kt``.
+  ``sum k_j = kt``; a joint element over :data:`MAX_JOINT_STIFFNESS_RATIO` times the
+  stiffest strip element of its interface is refused (one line naming ``kt``).
+
+Both tie penalties are relative to the elements they tie, so they are as strong on every
+mesh. A penalty fixed per unit length weakens against the elements as ``l_e^2``: its
+boundary layer at the lap ends (70 um for the rotation tie of two 8 mm strips) was resolved
+more and more, and a lap's first mode drifted by 3e-5 from 4 to 0.25 mm elements with
+growing steps (tests/test_case_file_interfaces.py).
 
 Supports: ``clamp`` fixes every DOF of the nodes in ``[x0, x1]``, ``pin`` fixes ``u, w``,
 ``spring`` adds grounded springs ``k_u, k_w, k_theta``. Point masses (and sensor masses)
@@ -50,10 +58,16 @@ NODE_TOLERANCE = 1e-9  # m: x values closer than this are one node
 #: joint element has a bending stiffness ~1e18 N/m, 1e15 times a 5 mm element's, and the
 #: free-free stiffness matrix's rigid-body modes drown in round-off (a Cholesky failure)
 SNAP_FRACTION = 0.1
-#: a tied tangential contact: this many times the through-thickness stiffness (a penalty
-#: for "no slip"; 1e3 keeps K well conditioned, the tied lap then equals the monolithic
-#: beam to the mesh error, tests/test_case_file.py)
+#: a tied contact: this many times the layers' own stiffness at a node (a penalty for "no
+#: slip" and "no relative rotation"; 1e3 keeps K well conditioned, the tied lap then
+#: equals the monolithic beam to the mesh error, tests/test_case_file.py)
 TIED_PENALTY = 1.0e3
+#: a joint element at most this many times stiffer than the stiffest strip element of its
+#: interface (axial ``EA/l``): a glued stack (0.4 m steel strips, 5 mm elements, 5 joint
+#: elements) gives the same modes from kt = 1e12 to 1e17 N/m (ratio 7e6; glue slip
+#: falling as 1/kt), at 1e18 (7e7) the Cholesky factor of ``K + M`` fails, at 1e20 a
+#: rigid-body mode comes out at 51 Hz
+MAX_JOINT_STIFFNESS_RATIO = 1.0e7
 
 
 @dataclass
@@ -198,6 +212,30 @@ def _interface_springs(cf, itf, nodes: _Nodes):
     return n_lo, n_up, k
 
 
+def _tie_stiffness(nodes: _Nodes, lo: str, up: str, n_lo, n_up, key: str) -> np.ndarray:
+    """Per interface node, ``sum (S_lo + S_up) / l_e`` over its interface elements, ``S``
+    the strips' ``EI`` (N m^2: a rotational stiffness, N m/rad) or ``EA`` (N: N/m)."""
+    s_lo, s_up = nodes.strips[lo], nodes.strips[up]
+    e_lo, e_up = np.asarray(n_lo)[:-1], np.asarray(n_up)[:-1]     # element = its left node
+    per = ((getattr(s_lo, key)[e_lo] + getattr(s_up, key)[e_up])
+           / (s_lo.x[e_lo + 1] - s_lo.x[e_lo]))
+    return np.concatenate([per, [0.0]]) + np.concatenate([[0.0], per])
+
+
+def _check_joint_stiffness(cf, i: int, k_max: float, *strips) -> None:
+    """Refuse a joint element stiffer than :data:`MAX_JOINT_STIFFNESS_RATIO` times the
+    stiffest strip element of its interface (one line naming ``[interface.i] kt``)."""
+    ea_l = max(float(np.max(s.EA / np.diff(s.x))) for s in strips)
+    if k_max > MAX_JOINT_STIFFNESS_RATIO * ea_l:
+        kt = cf.interfaces[i].kt
+        raise CaseFileError(
+            f"{cf.path}: [interface.{i}] kt: {kt:g} N/m puts {k_max:.3g} N/m on one joint "
+            f"element, {k_max / ea_l:.2g} times the stiffest strip element (EA/l = "
+            f"{ea_l:.3g} N/m); above {MAX_JOINT_STIFFNESS_RATIO:g} times the modes drown in "
+            f"round-off: give kt <= {kt * MAX_JOINT_STIFFNESS_RATIO * ea_l / k_max:.3g} N/m "
+            f"(stuck joints that stiff act as a bond: tangential = \"tied\")")
+
+
 def build_model(cf) -> BuiltCase:
     """Assemble the case file's linear model (module docstring)."""
     x_all = node_positions(cf)
@@ -226,7 +264,6 @@ def build_model(cf) -> BuiltCase:
         lo_b, up_b = (cf.beam(n) for n in itf.beams)
         xm = 0.5 * (itf.x[0] + itf.x[1])
         h_lo, z_lo, _ = lo_b.section_at(xm)
-        h_up = up_b.section_at(xm)[0]
         z_i = z_lo + 0.5 * h_lo
         lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
         m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
@@ -236,16 +273,20 @@ def build_model(cf) -> BuiltCase:
             normal_rows.append(G)
             normal_k.append(k)
         if itf.tangential == "tied":
+            k_slip = _tie_stiffness(nodes, lo_b.name, up_b.name, n_lo, n_up, "EA")
             couplings.append((interface_rows(m_up, m_lo, n_up, n_lo, nodes.n, lever_up, lever_lo),
-                              TIED_PENALTY * k))
+                              TIED_PENALTY * k_slip))
         if "tied" in (itf.normal, itf.tangential):
             # the gap w_top - w_bot is zero along the contact, so is its slope
             rot = coupling_rows(np.column_stack([m_up.dof(n_up, THETA), m_lo.dof(n_lo, THETA)]),
                                 [1.0, -1.0], nodes.n)
-            couplings.append((rot, TIED_PENALTY * k * (0.5 * (h_lo + h_up)) ** 2))
+            k_rot = _tie_stiffness(nodes, lo_b.name, up_b.name, n_lo, n_up, "EI")
+            couplings.append((rot, TIED_PENALTY * k_rot))
         if itf.tangential == "joint":
             xj = joint_positions(itf)
             kj = itf.kt * joint_shares(itf)
+            _check_joint_stiffness(cf, i, float(np.max(kj)), nodes.strips[lo_b.name],
+                                   nodes.strips[up_b.name])
             jn_lo = [nodes.node(lo_b.name, v) for v in xj]
             jn_up = [nodes.node(up_b.name, v) for v in xj]
             xj = nodes.strips[lo_b.name].x[jn_lo]      # a snapped joint sits at its node
