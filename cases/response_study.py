@@ -16,8 +16,6 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import numpy as np
-
 from cases.backbone_routes import epmc_route, linear_resonance_amplitude, response_route
 from cases.nonlinear_case import build_nonlinear_case
 from inverse.estimate import estimate

@@ -11,8 +11,6 @@ closed loop at the forces it gives.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 

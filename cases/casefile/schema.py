@@ -174,7 +174,6 @@ class _Reader:
             beams = [by_name[n] for n in names]
         else:
             beams = [self.on_beam(t, by_name)]
-        beam = beams[0]
         kind = t.text("kind", required=False, choices=("clamp", "pin", "spring", "free"),
                       default="free")
         x = t.span("x")

@@ -14,14 +14,13 @@ def headline(rep: "DoubleBeamReport") -> list[str]:
     """The main findings as sentences with this run's numbers."""
     c = rep.comparison()
     su = rep.setup
-    L = len(c)
     f = rep.study.fit
     k7 = max(i for i, r in enumerate(c) if r["level"] in f)
     lines = []
     em = rep.successful_estimates("measured")
     lines.append("Measured data, levels " + rep.study.fit_levels + ": " + "; ".join(
         f"{k}: chi = {e.chi:.4f}, |kappa1|B = {e.kappa1_B:.4g} 1/s^2, R~ = {e.R:.4g}"
-        for k, (e, _, _) in em.items()) + f" (paper: chi = -0.37366, |kappa1|B = 29.431).")
+        for k, (e, _, _) in em.items()) + " (paper: chi = -0.37366, |kappa1|B = 29.431).")
     lines.append(
         f"Simulation input ({rep.setup.source.method} estimate): chi = {su.chi:.4f}, "
         f"R = {su.R:.4g} N/m^(chi+2), beta = {su.beta:g}, phi_max = {su.phi_max:.4g} m, "

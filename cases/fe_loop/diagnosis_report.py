@@ -58,7 +58,7 @@ def format_fe(fe: dict) -> list:
                 if fe["unexplained"] else ""),
              f"  fit of {fe['candidate']}: rms {ft['rms_standardized']:.3g} noise sd, p = "
              f"{_g(ft['p_value'], '.2g')} ({ft['test']})",
-             f"  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),
+             "  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),
              f"  cross-validated: base error {_g(fe['base_error'])}, extended "
              f"{_g(fe['extended_error'])}, gain {_g(fe['gain'])}",
              f"  held out: base error {_g(fe['base_error_held_out'])}, extended "

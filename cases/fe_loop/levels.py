@@ -59,7 +59,7 @@ from fe.hb_resonance import resonance_levels
 from fe.hb_response import response_levels
 from fe.reduction import JointedSystem, reduced_basis
 from inverse.fe_reference import joint_slip_at_resonance, pick_fe_mode
-from inverse.iwan_modal import b_tilde, r_tilde
+from inverse.iwan_modal import r_tilde
 from inverse.random_amplitude import rayleigh_nodes
 from joints.iwan import IwanParameters
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from cases.fe_loop.causes import MacroSlip
 from cases.fe_loop.levels import BASE_PARAMETERS, abscissa_of
-from cases.fe_loop.select import Headline, chosen_model, fe_select
+from cases.fe_loop.select import chosen_model, fe_select
 from ident.measured import read_measured
 from inverse.estimate import parse_levels
 from inverse.profile import linear_grid, run_profiles
