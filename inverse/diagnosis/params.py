@@ -37,7 +37,9 @@ def physical_parameters(fit: Fit, obs: Observations) -> dict:
     chi = fit.chi
     p = chi + 1.0
     W = lin["W"] + obs.omega2[0]
-    out = {"omega2_0": W, "zeta_0": lin["c"] / (2.0 * np.sqrt(W)), "chi": chi}
+    # a failed or runaway fit can put the stuck omega2 at or below 0: no zeta_0 then
+    zeta_0 = lin["c"] / (2.0 * np.sqrt(W)) if W > 0 else float("nan")
+    out = {"omega2_0": W, "zeta_0": zeta_0, "chi": chi}
     log_s1, log_top = fit.log_s[0], float(np.max(fit.log_s))
     own = {}
     for c in m.causes:
