@@ -203,6 +203,20 @@ class FailsAbove:
         return ModalIwan()(v)
 
 
+def _noisy_double_beam_table(seed=4):
+    """The planted modal Iwan series at the double beam's 252 Hz, with noise of 5e-6
+    (omega2) and 2e-4 (zeta) relative drawn from ``seed``."""
+    from ident.modal_data import MeasuredData
+
+    om2, ze = ModalIwan()(TRUTH)
+    rng = np.random.default_rng(seed)
+    return MeasuredData(level=np.arange(1, 11), excitation=EXC,
+                        omega2=(2 * np.pi * 252.0) ** 2 / om2[0] * om2
+                        * (1 + 5e-6 * rng.standard_normal(10)),
+                        zeta=ze * (1 + 2e-4 * rng.standard_normal(10)),
+                        mode=np.ones(10, dtype=int), run_order=np.arange(1, 11))
+
+
 def test_failed_simulations_and_folds_are_counted():
     """A simulator failing over part of the parameter space: the fit counts its failed
     simulations; leave-one-out folds whose every fit fails give no error (None), with
@@ -249,17 +263,10 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
     from cases.fe_loop import causes as fe_causes
     from cases.fe_loop.diagnosis import report
     from cases.fe_loop.select import fe_select
-    from ident.modal_data import MeasuredData
 
     monkeypatch.setattr(fe_causes.CubicHardening, "step",
                         lambda self, fe, base, noise, top: float("nan"))
-    om2, ze = ModalIwan()(TRUTH)
-    rng = np.random.default_rng(4)
-    data = MeasuredData(level=np.arange(1, 11), excitation=EXC,
-                        omega2=(2 * np.pi * 252.0) ** 2 / om2[0] * om2
-                        * (1 + 5e-6 * rng.standard_normal(10)),
-                        zeta=ze * (1 + 2e-4 * rng.standard_normal(10)),
-                        mode=np.ones(10, dtype=int), run_order=np.arange(1, 11))
+    data = _noisy_double_beam_table()
     s = fe_select(data, np.arange(10) < 7, DoubleBeamLevels.from_data(data),
                   causes=("geometric-hardening",))
     c = s["extensions"]["geometric-hardening"][1]
@@ -319,7 +326,6 @@ def test_a_cause_whose_optimum_fails_from_a_cold_start_is_counted_not_fatal(monk
     from cases.fe_loop.diagnosis import report
     from cases.fe_loop.select import fe_select
     from fe.newton_path import SteadyStateError
-    from ident.modal_data import MeasuredData
 
     predict = DoubleBeamLevels.predict
 
@@ -330,13 +336,7 @@ def test_a_cause_whose_optimum_fails_from_a_cold_start_is_counted_not_fatal(monk
         return predict(self, p, extension)
 
     monkeypatch.setattr(DoubleBeamLevels, "predict", warm_only)
-    om2, ze = ModalIwan()(TRUTH)
-    rng = np.random.default_rng(4)
-    data = MeasuredData(level=np.arange(1, 11), excitation=EXC,
-                        omega2=(2 * np.pi * 252.0) ** 2 / om2[0] * om2
-                        * (1 + 5e-6 * rng.standard_normal(10)),
-                        zeta=ze * (1 + 2e-4 * rng.standard_normal(10)),
-                        mode=np.ones(10, dtype=int), run_order=np.arange(1, 11))
+    data = _noisy_double_beam_table()
     mask = np.arange(10) < 7
     s = fe_select(data, mask, DoubleBeamLevels.from_data(data),
                   causes=("geometric-hardening", "quadratic-damping"))
