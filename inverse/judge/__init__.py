@@ -43,7 +43,9 @@ from the base model, ``q`` parameters more, is ``q F(q, nu)`` under no effect, f
 heavier-tailed than ``chi-square(q)`` at small ``nu`` (``P(F(2, 3) > 5) = 0.11``
 against ``P(chi2_2 > 10) = 0.007``). The drop enters the IC at its known-noise
 equivalent of equal tail probability (:func:`known_noise_equivalent`), so a cause is
-named at the same false-alarm rate whatever the noise's degrees of freedom. The ``nu``
+named at the same false-alarm rate whatever the noise's degrees of freedom (the causes'
+ICs are raised together, by the shift the best eligible cause needs, so that they keep
+their chi2 differences among themselves). The ``nu``
 of a drop is that of the channels it comes from (:func:`drop_dof`: Satterthwaite with
 each channel weighted by its share of the drop): a force shortfall found in the
 response channel alone is judged on that channel's few degrees of freedom, not on all
