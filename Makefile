@@ -1,6 +1,7 @@
 # Two entry points, both self-contained from a fresh clone:
 #   make run   -> create .venv if missing, install, run the main job on the default case
-#   make test  -> same set-up, then the whole test suite
+#   make test  -> same set-up, then the whole test suite (pytest-xdist: one worker per
+#                 core, at most 4; each worker holds ~0.6 GB)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -22,7 +23,7 @@ run: $(STAMP)
 	$(BIN)/iwanfe loop --case double-beam --out results/double-beam
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4
 
 clean:
 	rm -rf $(VENV) results .pytest_cache build dist *.egg-info
