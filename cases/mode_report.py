@@ -36,13 +36,17 @@ def max_band_hz(E: float, rho: float, thickness: float, element_size: float) -> 
 
 
 def band_modes(model, band_hz, measured_hz=None, tolerance: float = MATCH_TOLERANCE) -> list[dict]:
-    """Modes with lo <= f <= hi as records (index = 1-based order in the whole model)."""
+    """Modes with lo <= f <= hi as records (index = 1-based order in the whole model);
+    a mode below 1e-3 of the highest frequency computed is a rigid-body mode (as in
+    ``bending_order``), whatever its shape's larger energy share."""
     lo, hi = band_hz
     omega, shapes = model.modes_below(hi)
     order = model.bending_order(omega, shapes)
+    rigid = omega <= 1e-3 * max(float(np.max(omega, initial=0.0)), 1e-300)
     f = omega / (2 * np.pi)
     return [{"index": int(i + 1), "frequency_hz": float(f[i]), "omega2": float(omega[i] ** 2),
-             "kind": model.classify_mode(shapes[:, i]), "bending_order": int(order[i]),
+             "kind": "rigid-body" if rigid[i] else model.classify_mode(shapes[:, i]),
+             "bending_order": int(order[i]),
              "glue_slip": model.glue_slip_participation(shapes[:, i]),
              "matches_measured": bool(measured_hz is not None
                                       and abs(f[i] / measured_hz - 1) <= tolerance)}

@@ -38,3 +38,16 @@ def test_first_bending_modes_within_the_published_scatter():
     nearest = np.minimum(np.abs(f / FLAT_HZ - 1), np.abs(f / MESOSCALE_HZ - 1))
     assert np.all(nearest < 0.011), nearest
 
+
+
+def test_a_free_free_beam_lists_three_rigid_body_modes_then_its_bending_modes():
+    """Free-free in x-z: axial translation, heave and pitch have zero frequency (the model
+    gives < 0.1 Hz against 166 Hz) and are listed as rigid-body modes, not as 'bending'
+    or 'axial'; bending orders 1, 2, 3 follow."""
+    from cases.mode_report import band_modes
+
+    rows = band_modes(resolve_case("brb").fe_model(), (0.0, 1300.0))
+    assert [r["kind"] for r in rows[:3]] == ["rigid-body"] * 3
+    assert all(r["frequency_hz"] < 0.1 for r in rows[:3])
+    assert [r["bending_order"] for r in rows[3:6]] == [1, 2, 3]
+    assert all(r["kind"] == "bending" for r in rows[3:6])
