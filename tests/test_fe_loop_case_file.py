@@ -89,6 +89,9 @@ def test_uncertainty_on_the_case_file(planted, capsys, tmp_path):
             "--no-progress")
     r = _json(capsys, *argv)
     upd = _json(capsys, "update", "--case", LAP, "--data", path)
+    # the file's own joint is named as the nominal one; each fitted value has its start
+    assert "[interface.0] chi = -0.5, fs = 200 N, beta = 1" in upd["notes"][0]
+    assert all("start" in p for p in upd["parameters"].values() if p["kind"] == "fitted")
     assert r["model"]["candidate"] == upd["model"]
     assert r["model"]["values"] == upd["fit"]["values"]
     for row, u in zip(r["levels"], upd["levels"]):

@@ -121,9 +121,16 @@ def update_builder(cf):
         settings = {**_defaults(cf, settings.get("data_path"), settings.get("mode_label")),
                     **settings}
         variants = assumption_variants(cf) if settings.get("assumptions") else None
-        return run_update(UpdateSettings(**settings), levels_builder(cf), executor=executor,
-                          progress=progress, store=store, case_name=cf.name,
-                          model_key=cf.path.read_text(), assumptions=variants)
+        r = run_update(UpdateSettings(**settings), levels_builder(cf), executor=executor,
+                       progress=progress, store=store, case_name=cf.name,
+                       model_key=cf.path.read_text(), assumptions=variants)
+        joints = "; ".join(f"[interface.{k}] chi = {i.chi:g}, fs = {i.fs:g} N, beta = "
+                           f"{i.beta:g}" for k, i in enumerate(cf.interfaces)
+                           if i.tangential == "joint")
+        r["notes"] = [f"the file's joint ({joints}) is the nominal one of modes and backbone; "
+                      f"update fits chi and the joint strength to the measured levels (beta: "
+                      f"the ln(phi_max/a_ref) row below; docs/case-file-loop.md)"]
+        return r
     return update
 
 

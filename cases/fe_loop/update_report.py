@@ -91,17 +91,18 @@ def summary(r: dict) -> dict:
         kind = "fitted" if name in best.free else "assumed"
         side = best.at_bound.get(name, False)
         entry = {"value": value, "unit": p.unit, "description": p.description, "kind": kind}
-        if kind == "fitted":
-            entry.update(at_bound=side, lower_bound=p.lower, upper_bound=p.upper)
+        if kind == "fitted":       # the start: the case's value (a file's given chi, too)
+            entry.update(at_bound=side, lower_bound=p.lower, upper_bound=p.upper,
+                         start=p.start)
         if pr is not None:
             lo, hi = bounded_interval(pr, p.lower, p.upper, side)
             entry.update(interval=[lo, hi], status=pr.status,
                          interval_kind="profile likelihood")
         elif kind == "fitted":
             entry.update(linearized_interval(value, best.std_error(name), p.lower, p.upper))
-            if kind == "assumed" and abs(value - p.start) > 1e-9:
-                entry["kind"] = "profile minimum (grid)"
-                entry["assumed_value"] = p.start
+        if kind == "assumed" and abs(value - p.start) > 1e-9:
+            entry["kind"] = "profile minimum (grid)"
+            entry["assumed_value"] = p.start
         if name == "ln_phimax" and value >= r["micro_limit"]:
             entry.update(value=r["micro_limit"], kind="at the micro-slip limit (beta = 0)")
         params[name] = entry
@@ -154,6 +155,7 @@ def summary(r: dict) -> dict:
             "fit_levels": fit_levels, "held_out_levels": [row["level"] for row in held],
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
             "derived": derived, "levels": levels, "misfit": statements,
+            "notes": list(r.get("notes", [])),
             "tie": _tie_statement(data, mask), "base_chi2": base.chi2,
             "cause": sel.cause, "also": sel.also, "model": r["candidate"],
             "unexplained": sel.unexplained, "fit_test": test.to_json(),
@@ -177,14 +179,16 @@ def format_text(s: dict) -> str:
              f"judge, as diagnose --case; fit test p = {_fmt(ft['p_value'], 2)}, {ft['test']})",
              f"noise: sigma_omega2 = {n['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = "
              f"{n['sigma_zeta'][0]:.3g} ({n['source']})",
+             *(f"note: {t}" for t in s.get("notes", [])),
              f"{'parameter':26s} {'value':>14s}  {int(100 * s['confidence'])}% profile interval"
              f"          status / kind"]
     for name, p in s["parameters"].items():
         iv = p.get("interval")
         ivs = f"{_fmt(iv[0])} .. {_fmt(iv[1])}" if iv else ""
         ab = f" / at {p['at_bound']} bound" if p.get("at_bound") else ""
+        start = f" from {p['start']:.4g}" if "start" in p else ""
         lines.append(f"{_LABEL.get(name, name):26s} {p['value']:14.7g}  {ivs:28s} "
-                     f"{p.get('status', '')} / {p['kind']}{ab}")
+                     f"{p.get('status', '')} / {p['kind']}{start}{ab}")
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
                  f"F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} "
