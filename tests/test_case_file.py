@@ -345,3 +345,32 @@ def test_convergence_warns_on_a_spectrum_that_does_not_converge():
     assert "round-off" in note and not note.startswith("WARNING")
     (w,) = report([634.40, 634.40, 661.18, 634.40], roundoff=0.04)   # two shifts disagree
     assert w.startswith("WARNING mode 1: two eigen-solutions differ by 4.0e-02")
+
+
+def test_case_check_reads_and_checks_the_measured_table(tmp_path, capsys):
+    """``case check`` reads the file's ``[measured]`` table against the measured-data spec:
+    a NaN in it is one line naming file, line and column (exit 2), as every other command
+    that reads it would say; the good table is reported with its modes and levels."""
+    import shutil
+    from pathlib import Path
+
+    from cli.main import main
+
+    src = Path(__file__).resolve().parents[1] / "docs" / "case-files"
+    shutil.copy(src / "bolted-lap-cantilever.toml", tmp_path)
+    table = (src / "bolted-lap-cantilever-levels.csv").read_text().splitlines()
+    (tmp_path / "bolted-lap-cantilever-levels.csv").write_text("\n".join(table) + "\n")
+    case = str(tmp_path / "bolted-lap-cantilever.toml")
+    assert main(["case", "check", case]) == 0
+    out = capsys.readouterr().out
+    assert f"measured data: {tmp_path / 'bolted-lap-cantilever-levels.csv'} read and " \
+           f"checked ({len(table) - 1} rows; mode 2: {len(table) - 1} levels)" in out
+    header = table[0].split(",")
+    row = table[3].split(",")
+    row[header.index("zeta")] = "nan"
+    table[3] = ",".join(row)
+    (tmp_path / "bolted-lap-cantilever-levels.csv").write_text("\n".join(table) + "\n")
+    assert main(["case", "check", case]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"iwanfe: error: {tmp_path / 'bolted-lap-cantilever-levels.csv'}:4:zeta: "
+                   "not a finite number: 'nan'"]
