@@ -374,3 +374,28 @@ def test_case_check_reads_and_checks_the_measured_table(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"iwanfe: error: {tmp_path / 'bolted-lap-cantilever-levels.csv'}:4:zeta: "
                    "not a finite number: 'nan'"]
+
+
+def test_case_check_says_when_the_declared_mode_is_not_the_one_the_data_lie_nearest(
+        tmp_path, capsys):
+    """The lap's table was measured on bending mode 2; a file declaring ``mode = 3`` is
+    told that the table's lowest level lies nearest bending mode 2, which the FE loop
+    follows; the file as shipped (``mode = 2``) is not."""
+    import shutil
+    from pathlib import Path
+
+    from cli.main import main
+
+    src = Path(__file__).resolve().parents[1] / "docs" / "case-files"
+    shutil.copy(src / "bolted-lap-cantilever-levels.csv", tmp_path)
+    text = (src / "bolted-lap-cantilever.toml").read_text()
+    assert "\nmode = 2" in text
+    for mode, warned in ((2, False), (3, True)):
+        case = tmp_path / f"lap{mode}.toml"
+        case.write_text(text.replace("\nmode = 2", f"\nmode = {mode}"))
+        assert main(["case", "check", str(case)]) == 0
+        out = capsys.readouterr().out
+        assert (f"warning: [measured] mode = {mode} (bending mode {mode}) but the table's "
+                f"lowest level" in out) == warned
+        if warned:
+            assert "lies nearest bending mode 2" in out

@@ -6,6 +6,8 @@ Example::
 """
 from __future__ import annotations
 
+import numpy as np
+
 from cases.registry import resolve_case
 from runs.jsonio import print_json
 
@@ -26,20 +28,39 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _measured(case) -> dict | None:
+def _measured(case, modes: list) -> dict | None:
     """The case's measured data read and checked against the measured-data spec (FRF
     files identified first): its path, modes and levels; None when it names none. A bad
-    table raises the reader's one-line error (exit 2)."""
+    table raises the reader's one-line error (exit 2). ``modes``: the summary's modes,
+    to say when the declared ``[measured] mode`` is not the bending mode nearest the
+    table's lowest level (the one the FE loop follows)."""
     if "measured_data" not in case.capabilities:
         return None
     from ident.measured import read_measured
 
     path = case.measured_data()
     data = read_measured(path)
-    return {"file": str(path), "modes": [int(m) for m in data.modes],
+    warnings = list(data.warnings)
+    declared = None
+    if "calibrated_file" in case.builders:
+        meas = case.builders["calibrated_file"]()[0].measured
+        declared = getattr(meas, "mode", None)
+    labels = [int(m) for m in data.modes]
+    bending = [m for m in modes if m.get("bending_order")]
+    if declared and bending:
+        d = data.for_mode(declared if declared in labels else labels[0])
+        f1 = float(np.sqrt(d.omega2[np.argmin(d.excitation)]) / (2 * np.pi))
+        near = min(bending, key=lambda m: abs(m["frequency_hz"] - f1))
+        if near["bending_order"] != declared:
+            warnings.append(
+                f"[measured] mode = {declared} (bending mode {declared}) but the table's "
+                f"lowest level ({f1:.4g} Hz) lies nearest bending mode "
+                f"{near['bending_order']} ({near['frequency_hz']:.4g} Hz), which the FE "
+                f"loop follows (the joint-slipping mode nearest the measured frequency)")
+    return {"file": str(path), "modes": labels,
             "levels": {int(m): len(set(data.for_mode(int(m)).level.tolist()))
                        for m in data.modes},
-            "rows": len(data), "warnings": list(data.warnings)}
+            "rows": len(data), "warnings": warnings}
 
 
 def run(args) -> int:
@@ -47,7 +68,7 @@ def run(args) -> int:
 
     case = resolve_case(args.case)
     summary = case.summary()
-    measured = _measured(case)
+    measured = _measured(case, summary.get("modes", []))
     if args.json:
         print_json({**summary, "measured_data": measured})
         return 0
