@@ -177,7 +177,6 @@ class ParameterDistribution:
                 "p_bounds": list(self.p_bounds),
                 "admissible_fraction": self.admissible_fraction()}
 
-
     def arguments(self, x, nominal: bool) -> tuple:
         """The per-sample model's arguments after ``inputs``: ``(p, ln_kt)``, or
         ``(None, None)`` for the nominal sample."""

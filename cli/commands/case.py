@@ -54,9 +54,10 @@ def _measured(case, modes: list) -> dict | None:
         if near["bending_order"] != declared:
             warnings.append(
                 f"[measured] mode = {declared} (bending mode {declared}) but the table's "
-                f"lowest level ({f1:.4g} Hz) lies nearest bending mode "
-                f"{near['bending_order']} ({near['frequency_hz']:.4g} Hz), which the FE "
-                f"loop follows (the joint-slipping mode nearest the measured frequency)")
+                f"lowest level ({f1:.4g} Hz, measured) lies nearest bending mode "
+                f"{near['bending_order']} ({near['frequency_hz']:.4g} Hz in the model as "
+                f"given or calibrated), which the FE loop follows (the joint-slipping mode "
+                f"nearest the measured frequency)")
     return {"file": str(path), "modes": labels,
             "levels": {int(m): len(set(data.for_mode(int(m)).level.tolist()))
                        for m in data.modes},
