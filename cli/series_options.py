@@ -26,7 +26,8 @@ from ident.frf_header import CONTROLS, FRF_TESTS
 from ident.poles import QUANTITIES
 from ident.series import load_series
 
-__all__ = ["add_series_arguments", "check_series_args", "series_from_args", "progress_bar"]
+__all__ = ["add_series_arguments", "add_amplitude_refit", "check_series_args",
+           "series_from_args", "progress_bar"]
 
 
 def add_series_arguments(parser, required: bool = True, files_help: str | None = None) -> None:
@@ -54,8 +55,19 @@ def add_series_arguments(parser, required: bool = True, files_help: str | None =
                        help="test type of every FRF file (overrides the files; default "
                             "stepped-sine): random = H1 averaged over broadband random "
                             "excitation, --excitation its drive RMS")
+    add_amplitude_refit(group)
     group.add_argument("--rows", type=int, default=DEFAULT_ROWS, metavar="N",
                        help="free-decay record: geometric amplitude bins along the decay")
+
+
+def add_amplitude_refit(group) -> None:
+    """``--amplitude-refit``: force-controlled levels refitted at their peak amplitudes
+    (:mod:`ident.amplitude_poles`)."""
+    group.add_argument("--amplitude-refit", action="store_true",
+                       help="force control: refit each level's pole with its amplitude "
+                            "dependence across the band and report the pole at the peak "
+                            "(removes the linear fit's bias in micro-slip; not reliable "
+                            "where the damping peaks within a band: docs/commands.md)")
 
 
 def progress_bar(n):
@@ -85,4 +97,5 @@ def series_from_args(args):
                        excitation=args.excitation, control=args.control,
                        run_order=args.run_order, reference=args.reference,
                        progress=progress_bar(len(args.files)), test=args.test,
-                       decay_options={"n_rows": args.rows})
+                       decay_options={"n_rows": args.rows},
+                       amplitude_refit=args.amplitude_refit)

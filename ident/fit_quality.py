@@ -58,10 +58,11 @@ def narrowed_band(freq_hz, band, frequency_hz, zeta, others=()):
     return new if n >= MIN_LINES else None
 
 
-def band_shift(freq_hz, frf, quantity, result, index, options=None):
+def band_shift(freq_hz, frf, quantity, result, index, options=None, refit=None):
     """Identify mode ``index`` of ``result`` again, alone, on the narrowed band, from the
     FRF less the other modes as identified (their modal receptances), with the same
-    ``options`` of :func:`ident.identify.identify`.
+    ``options`` of :func:`ident.identify.identify`, then ``refit(freq_hz, receptance,
+    narrow_identification)`` if given (the series' amplitude-dependent refit).
 
     Returns None when the band cannot be narrowed or the narrow fit fails, else a dict
     with the band (Hz), the changes of frequency (Hz) and zeta, and their z-scores."""
@@ -78,7 +79,8 @@ def band_shift(freq_hz, frf, quantity, result, index, options=None):
                                          for m in others), np.zeros((H.shape[0], 1)))
     try:
         narrow = identify(freq_hz, H, band=band, n_modes=1, quantity="receptance",
-                          **(options or {})).modes
+                          **(options or {}))
+        narrow = (refit(freq_hz, H, narrow) if refit is not None else narrow).modes
     except ValueError:
         return None
     if not narrow:

@@ -40,7 +40,7 @@ up to 5 % on the systems above, against 0.01 % / 2 % required.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.signal import find_peaks
@@ -76,6 +76,12 @@ class IdentifiedMode:
     omega2_std, zeta_std : float
         Standard uncertainties of ``omega2`` (rad^2/s^2) and ``zeta`` from the
         refinement's least squares (:mod:`ident.pole_uncertainty`); NaN if unknown.
+    response_at_peak : float
+        Drive-point response amplitude the pole refers to (the FRF's quantity times N:
+        m, m/s or m/s^2), set by :mod:`ident.amplitude_poles`; NaN for a linear fit.
+    omega2_slope, zeta_slope : float
+        ``d ln omega2 / d ln a`` and ``d ln zeta / d ln a`` across the level's lines
+        (:mod:`ident.amplitude_poles`); NaN for a linear fit.
     """
 
     frequency_hz: float
@@ -86,6 +92,9 @@ class IdentifiedMode:
     stability: float = 1.0
     omega2_std: float = float("nan")
     zeta_std: float = float("nan")
+    response_at_peak: float = float("nan")
+    omega2_slope: float = float("nan")
+    zeta_slope: float = float("nan")
 
 
 @dataclass
@@ -93,13 +102,16 @@ class Identification:
     """Modes (sorted by frequency), the stabilization diagram, the relative rms misfit
     of the final model over the band, the band used (Hz) and the lag-1 correlation of
     the weighted residuals along frequency (near 0 for noise, near 1 for a model that
-    cannot follow the data)."""
+    cannot follow the data), the pseudo-modes the refinement kept outside the band
+    (rad/s poles) and notes on what was done to the fit."""
 
     modes: list
     diagram: StabilizationDiagram
     fit_error: float
     band_hz: tuple = (float("nan"), float("nan"))
     residual_correlation: float = float("nan")
+    pseudo_poles: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    notes: list = field(default_factory=list)
 
 
 def _prepare(freq_hz, frf, band):
@@ -337,7 +349,8 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
         raise ValueError(f"{n_modes} mode(s) requested, {len(modes)} left after the "
                          f"refinement in {lo:g}-{hi:g} Hz (poles ran out of the band or "
                          "to zero damping)")
-    return Identification(modes, diagram, fit_error, (float(lo), float(hi)), corr)
+    return Identification(modes, diagram, fit_error, (float(lo), float(hi)), corr,
+                          np.asarray(pseudo, complex))
 
 
 def identify_modes(freq_hz, frf, band=None, n_modes=None, **options) -> list[IdentifiedMode]:

@@ -14,11 +14,13 @@ import numpy as np
 
 def _modal_basis(w, poles) -> np.ndarray:
     """Complex columns (K, 2 m + 4) whose *real* coefficients span the receptance
-    modal model: pole pairs (Re A, Im A), then U (1, i) and L (-1/w^2, -i/w^2)."""
+    modal model: pole pairs (Re A, Im A), then U (1, i) and L (-1/w^2, -i/w^2).
+    ``poles`` (m,), or (K, m): a pole per line (:mod:`ident.amplitude_poles`)."""
     poles = np.asarray(poles)
+    poles = poles if poles.ndim == 2 else poles[None, :]
     iw = 1j * w[:, None]
-    b = 1.0 / (iw - poles[None, :])
-    bc = 1.0 / (iw - poles.conj()[None, :])
+    b = 1.0 / (iw - poles)
+    bc = 1.0 / (iw - poles.conj())
     inv_w2 = -1.0 / w**2
     return np.concatenate([b + bc, 1j * (b - bc), np.ones((w.size, 1)),
                            1j * np.ones((w.size, 1)), inv_w2[:, None],
@@ -48,7 +50,8 @@ def lsfd(freq_hz, frf, poles, weights=None):
     """Residues and residual terms for given poles (least-squares frequency domain).
 
     Fits ``H_o = sum_r A_ro/(i w - l_r) + conj(A_ro)/(i w - conj l_r) + U_o - L_o/w^2``
-    (receptance form) in weighted least squares, each point separately.
+    (receptance form) in weighted least squares, each point separately. ``poles``
+    (m,), or (K, m) for a pole per line.
 
     Returns
     -------
@@ -56,7 +59,7 @@ def lsfd(freq_hz, frf, poles, weights=None):
     """
     w = 2 * np.pi * np.asarray(freq_hz, float)
     H = np.asarray(frf)
-    m = len(poles)
+    m = np.shape(poles)[-1]
     B = _modal_basis(w, poles)                                            # (K, nc)
     if weights is None:       # one basis for all points: one least-squares solve
         Br = np.concatenate([B.real, B.imag], axis=0)                     # (2K, nc)

@@ -14,16 +14,19 @@ common number; the level's warnings say so). Each mode gets the warnings of
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
+
+from ident.amplitude_poles import amplitude_poles
 from ident.errors import InputError
 from ident.fit_quality import band_shift, mode_warnings
 from ident.frf_files import FRFSet, read_frf
 from ident.frf_header import with_overrides
 from ident.identify import identify
 from ident.modal_data import MeasuredData
-from ident.series_table import series_table
+from ident.series_table import drive_point, series_table
 from ident.tracking import agree_on_modes
 
 
@@ -42,16 +45,60 @@ class LevelFit:
         return self.frfset.excitation
 
 
-def _identify(s: FRFSet, quantity, band, n_modes, options):
+def refits_amplitude(s: FRFSet) -> bool:
+    """Whether a level's poles are refitted with their amplitude dependence: force
+    control, stepped sine (:mod:`ident.amplitude_poles`)."""
+    return (s.control or "force") == "force" and (s.test or "stepped-sine") != "random"
+
+
+def with_amplitude_poles(s: FRFSet, freq_hz, frf, quantity, result):
+    """``result`` (an Identification of ``frf`` (K, P) at ``freq_hz``, lines of ``s``)
+    with the poles at each mode's peak amplitude (:func:`ident.amplitude_poles
+    .amplitude_poles`) when the level :func:`refits_amplitude`; a note when the refit
+    is not used."""
+    if not refits_amplitude(s) or not result.modes:
+        return result
+    lo, hi = result.band_hz
+    keep = (freq_hz >= lo) & (freq_hz <= hi) & (freq_hz > 0)
+    held = 1.0 if s.excitation is None else abs(float(s.excitation))
+    force = (np.full(keep.sum(), held) if s.force is None
+             else np.interp(freq_hz[keep], s.freq_hz, np.abs(s.force)))
+    modes, note = amplitude_poles(freq_hz[keep], np.asarray(frf).reshape(len(freq_hz), -1)[keep],
+                                  force, quantity, result.modes, drive_point(s)[0],
+                                  result.pseudo_poles)
+    return replace(result, modes=modes, notes=list(result.notes) + ([note] if note else []))
+
+
+def identify_level(s: FRFSet, quantity, band=None, n_modes=None, options=None,
+                   amplitude=False):
+    """One level identified (:func:`ident.identify.identify`); with ``amplitude`` its
+    poles then refitted at their peak amplitudes where :func:`refits_amplitude`."""
     try:
-        return identify(s.freq_hz, s.frf, band=band, n_modes=n_modes, quantity=quantity,
-                        **options)
+        res = identify(s.freq_hz, s.frf, band=band, n_modes=n_modes, quantity=quantity,
+                       **(options or {}))
     except ValueError as exc:
         raise InputError(f"{s.source or 'FRF set'}: {exc}") from None
+    return with_amplitude_poles(s, s.freq_hz, s.frf, quantity, res) if amplitude else res
+
+
+def _fewer_modes(s: FRFSet, quantity, band, n, options, before):
+    """Level ``s`` identified again with ``n`` modes (:func:`ident.tracking
+    .agree_on_modes`). A mode of ``before`` that no kept mode's half-power width holds
+    is a resonance the series leaves out: the amplitude-dependent refit would take it
+    for an amplitude dependence, so the level keeps the linear fit, with a note."""
+    res = identify_level(s, quantity, band, n, options)
+    left = [m.frequency_hz for m in before.modes
+            if not any(abs(m.frequency_hz - k.frequency_hz) <= k.zeta * k.frequency_hz
+                       for k in res.modes)]
+    if left and refits_amplitude(s):
+        return replace(res, notes=list(res.notes) + [
+            f"a resonance at {', '.join(f'{x:.6g}' for x in left)} Hz left out of this "
+            "level's band: linear fit kept (no amplitude-dependent refit)"])
+    return with_amplitude_poles(s, s.freq_hz, s.frf, quantity, res)
 
 
 def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
-                    progress=None, check_band=True) -> list[LevelFit]:
+                    progress=None, check_band=True, amplitude_refit=False) -> list[LevelFit]:
     """Identify every FRF set of a series (module doc).
 
     Parameters
@@ -62,6 +109,8 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
     options : further keyword arguments of :func:`ident.identify.identify`.
     progress : optional wrapper of an iterable (a progress bar).
     check_band : run the band-sensitivity check (one more identification per mode).
+    amplitude_refit : refit force-controlled levels at their peak amplitudes
+        (:mod:`ident.amplitude_poles`; opt-in, docs/commands.md says why).
     """
     options = dict(options or {})
     fits = []
@@ -72,19 +121,26 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
             raise InputError(f"{s.source}: the file holds {s.quantity}, --quantity says "
                              f"{quantity}")
         fits.append(LevelFit(s, q, s.control or "force",
-                             _identify(s, q, band, n_modes, options)))
+                             identify_level(s, q, band, n_modes, options, amplitude_refit)))
     notes = [[] for _ in fits]
     if n_modes is None:
         def refit(k, n):
-            return _identify(fits[k].frfset, fits[k].quantity, band, n, options)
+            if not amplitude_refit:
+                return identify_level(fits[k].frfset, fits[k].quantity, band, n, options)
+            return _fewer_modes(fits[k].frfset, fits[k].quantity, band, n, options,
+                                fits[k].result)
 
         results, notes = agree_on_modes([f.result for f in fits], refit)
         for f, res in zip(fits, results):
             f.result = res
     for k, f in enumerate(fits):
         s = f.frfset
-        f.warnings = [notes[k] + mode_warnings(
-            f.result, i, band_shift(s.freq_hz, s.frf, f.quantity, f.result, i, options)
+        def refit(freq_hz, frf, narrow, s=s):
+            return with_amplitude_poles(s, freq_hz, frf, "receptance", narrow)
+
+        f.warnings = [notes[k] + list(f.result.notes) + mode_warnings(
+            f.result, i, band_shift(s.freq_hz, s.frf, f.quantity, f.result, i, options,
+                                    refit if amplitude_refit else None)
             if check_band else None) for i in range(len(f.result.modes))]
     return fits
 
@@ -128,7 +184,8 @@ def read_series_sets(paths, excitation=None, control=None, run_order=None, refer
 
 def load_series(paths, band=None, n_modes=None, quantity=None, excitation=None,
                 control=None, run_order=None, reference=None, options=None,
-                progress=None, test=None, decay_options=None) -> MeasuredData:
+                progress=None, test=None, decay_options=None,
+                amplitude_refit=False) -> MeasuredData:
     """A measured-data table (one CSV file), the FRF files of a series (one per level,
     identified first) or a free-decay time record (:mod:`ident.free_decay_table`):
     the input of ``iwanfe estimate`` and ``iwanfe diagnose``."""
@@ -155,5 +212,6 @@ def load_series(paths, band=None, n_modes=None, quantity=None, excitation=None,
                          "give either one measured-data table or the FRF files of a series")
     sets = read_series_sets(paths, excitation, control, run_order, reference, test)
     fits = identify_series(sets, band=band, n_modes=n_modes, quantity=quantity,
-                           options=options, progress=progress)
+                           options=options, progress=progress,
+                           amplitude_refit=amplitude_refit)
     return series_table(fits)

@@ -5,10 +5,12 @@ of :func:`ident.series.identify_series` across levels (:func:`ident.tracking.tra
 and writes one row per mode and level:
 
 * force control: ``excitation`` = the held level; ``response_amplitude`` = the
-  identified mode's amplitude at its resonance ``omega_d`` at the drive point,
-  ``|H_r(omega_d)| F``: the mode's own FRF (residue over pole and its conjugate) in the
-  file's quantity (m, m/s or m/s^2 per N) times the measured force there (the ``force``
-  column, interpolated) or else the held level;
+  drive-point amplitude at the mode's peak to which its refitted pole refers
+  (``response_at_peak`` of :mod:`ident.amplitude_poles`: the measured response, the
+  mode's share of it); where the refit was not used, the identified mode's amplitude
+  at its resonance ``omega_d``, ``|H_r(omega_d)| F``: the mode's own FRF (residue over
+  pole and its conjugate) in the file's quantity (m, m/s or m/s^2 per N) times the
+  measured force there (the ``force`` column, interpolated) or else the held level;
 * response control: ``response_amplitude`` = the held level; ``excitation`` = the force
   at resonance: the ``force`` column at ``omega_d``, else the held level over the
   measured ``|H(omega_d)|`` (interpolated between lines).
@@ -22,7 +24,9 @@ and writes one row per mode and level:
 ``run_order`` comes from the files (all or none; default the file order); files that
 held the same level (equal to 1e-9) are repeats of one level (rows sharing ``level``);
 ``omega2_std``/``zeta_std`` from the identification (:mod:`ident.pole_uncertainty`;
-left out when a level has none), ``x_fit_error`` and ``x_warning`` carry the fit
+left out when a level has none), ``x_omega2_slope``/``x_zeta_slope`` the within-level
+slopes ``d ln omega2 / d ln a``, ``d ln zeta / d ln a`` of the amplitude-dependent refit
+(NaN where it was not used), ``x_fit_error`` and ``x_warning`` carry the fit
 warnings through a CSV round trip (:func:`ident.modal_data.annotation_warnings`). A
 track shorter than 4 levels beside longer ones is left out, with a note on the levels
 where it was seen; when no track reaches 4 of 4 or more levels the table is refused
@@ -78,6 +82,8 @@ def _amplitudes(f, mode):
         if force is None:
             force = s.excitation / float(np.interp(f_d, s.freq_hz, np.abs(s.frf[:, p])))
         return force, s.excitation, note
+    if np.isfinite(mode.response_at_peak):      # the amplitude the pole refers to
+        return s.excitation, mode.response_at_peak, note
     amp = mode_frf_at_resonance(mode, p, f.quantity) * (s.excitation if force is None else force)
     return s.excitation, amp, note
 
@@ -131,7 +137,8 @@ def series_table(fits) -> MeasuredData:
     keep = np.array([n_levels[lab] >= MIN_LEVELS or max(n_levels.values()) < MIN_LEVELS
                      for lab in labels])
     out = {k: [] for k in ("level", "excitation", "omega2", "zeta", "mode", "response",
-                           "run", "w_std", "z_std", "f", "stab", "mac", "err", "src", "warn")}
+                           "run", "w_std", "z_std", "f", "stab", "mac", "err", "src", "warn",
+                           "w_slope", "z_slope")}
     dropped = [(r, n_levels[r[2]]) for r, ok in zip(rows, keep) if not ok]
     for (k, i, lab, m), ok in zip(rows, keep):
         if not ok:
@@ -147,7 +154,8 @@ def series_table(fits) -> MeasuredData:
         for key, v in zip(out, (level_of[k], exc, mode.omega2, mode.zeta, lab, amp,
                                 run_order[k], mode.omega2_std, mode.zeta_std,
                                 mode.frequency_hz, mode.stability, m, f.result.fit_error,
-                                Path(f.frfset.source).name, " | ".join(warn))):
+                                Path(f.frfset.source).name, " | ".join(warn),
+                                mode.omega2_slope, mode.zeta_slope)):
             out[key].append(v)
     stds = np.array([out["w_std"], out["z_std"]], float)
     has_std = bool(np.all(np.isfinite(stds) & (stds > 0)))
@@ -161,7 +169,9 @@ def series_table(fits) -> MeasuredData:
         extra={"x_frequency_hz": np.array(out["f"]), "x_stability": np.array(out["stab"]),
                "x_mac": np.array(out["mac"], float), "x_fit_error": np.array(out["err"]),
                "x_source": np.array(out["src"], dtype=str),
-               "x_warning": np.array(out["warn"], dtype=str)},
+               "x_warning": np.array(out["warn"], dtype=str),
+               "x_omega2_slope": np.array(out["w_slope"], float),
+               "x_zeta_slope": np.array(out["z_slope"], float)},
         source="FRF series")
     data.warnings = annotation_warnings(data)
     if not has_std:

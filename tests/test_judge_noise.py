@@ -148,3 +148,34 @@ def test_a_run_order_term_fitted_on_the_repeats_costs_them_its_dof():
                          / sf**2)
     assert len(ratio) > 200 and 0.65 < np.median(ratio) < 1.2, (
         len(ratio), np.quantile(ratio, [0.1, 0.5, 0.9]))
+
+
+def test_a_scatter_within_the_identifications_noise_is_not_taken_as_repeatability():
+    """Planted series whose only noise is a known identification noise (the stds given
+    are the true ones): the noise model keeps the identification's noise as known in
+    about 1 - SCATTER_P of them (an estimate on a few dof exceeds the true noise in half
+    of them by chance). With a planted repeatability 3 times the identification's it
+    estimates one in most series, and near the truth."""
+    from inverse.judge import noise_model
+    from inverse.judge.noise import SCATTER_P
+
+    def kinds(seed, rep_factor):
+        rng = np.random.default_rng(seed)
+        out, ratio = [], []
+        for _ in range(300):
+            x, lw, _, sf, _, t = planted_series(rng)
+            w2 = np.exp(lw)          # planted noise sf: let it be the identification's
+            rep = rep_factor * sf
+            w2 = w2 * np.exp(rep * rng.standard_normal(w2.size))
+            nm = noise_model(np.exp(x), {"omega2": w2}, {"omega2": sf * w2},
+                             np.arange(w2.size), t)
+            out.append(nm.kind["omega2"] == "identification")
+            if rep_factor:
+                ratio.append(np.median(nm.repeatability["omega2"] / w2) / rep)
+        return np.mean(out), (np.median(ratio) if ratio else None)
+
+    known, _ = kinds(41, 0.0)
+    assert abs(known - (1 - SCATTER_P)) < 0.06, known
+    known_rep, ratio = kinds(43, 3.0)
+    assert known_rep < 0.35, known_rep
+    assert 0.7 < ratio < 1.3, ratio

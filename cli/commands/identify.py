@@ -124,7 +124,7 @@ def run(args) -> int:
                    pseudo_modes=args.pseudo_modes)
     fits = identify_series(sets, band=args.band, n_modes=args.modes, quantity=args.quantity,
                            options=options, progress=progress_bar(len(sets)),
-                           check_band=args.band_check)
+                           check_band=args.band_check, amplitude_refit=args.amplitude_refit)
 
     if args.plot:
         from viz.stabilization import plot_stabilization

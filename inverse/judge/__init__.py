@@ -24,7 +24,11 @@ e.g. the log response amplitude, the same way on an absolute scale):
   the term differs between runs of one level.
   The curve is not the model being judged: a misfit of that model
   cannot hide as noise. Both estimates measure the *total* scatter; the repeatability
-  is what exceeds the identification's part, ``rep^2 = max(0, s^2 - mean(ident^2))``.
+  is what exceeds the identification's part, ``rep^2 = s^2 - mean(ident^2)``, when it
+  exceeds it significantly: ``nu s^2 / mean(ident^2)`` above the ``1 -``
+  :data:`~inverse.judge.noise.SCATTER_P` quantile of chi-square(nu); else 0 (an estimate
+  on a few dof exceeds a correct identification noise in half the series by chance,
+  and would trade known noise for one on those few dof).
 * **total** ``= sqrt(identification^2 + repeatability^2)``, floored at
   :data:`FLOORS` (the digits a table prints). ``dof`` is ``inf`` when the repeatability
   part is 0 (the identification's stds are taken as known), else the estimate's.

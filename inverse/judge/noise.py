@@ -7,12 +7,16 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.stats import chi2 as chi2_dist
 
-__all__ = ["MIN_REPEAT_DOF", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
+__all__ = ["MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
            "pooled_repeats"]
 
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
 MIN_REPEAT_DOF = 6
+#: The scatter counts as repeatability when a chi-square test says it exceeds the
+#: identification's noise at this level (module doc of :mod:`inverse.judge`).
+SCATTER_P = 0.05
 #: Noise floors: relative for omega2 and zeta, absolute for other channels.
 FLOORS = {"omega2": 1e-9, "zeta": 1e-7}
 _DEFAULT_FLOOR = 1e-2
@@ -263,13 +267,18 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
             words, kd = curve_words, "smooth"
         id_rel2 = float(np.mean((idn / scale) ** 2))
         r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
+        if r_rel and id_rel2 > 0 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P:
+            r_rel = 0.0
+            words += (f" exceeds it by {math.sqrt(s2 / id_rel2):.2f} times, within chance: "
+                      f"p = {chi2_dist.sf(nu * s2 / id_rel2, nu):.2g}")
         r = r_rel * scale
         if r_rel > 0 and c in model_error:
             r = np.sqrt(r**2 + np.asarray(model_error[c], float) ** 2)
         if r_rel == 0.0:
             has_id = stds.get(c) is not None
             words = (("identification only" if has_id else "floor only")
-                     + (f" (the {words} does not exceed it)" if nu else
+                     + ((f" (the {words})" if " within chance" in words else
+                         f" (the {words} does not exceed it)") if nu else
                         " (too few levels for a scatter)"))
             kd, nu = "identification", math.inf
         fl = floors.get(c, _DEFAULT_FLOOR) * (float(np.median(np.abs(y))) if rel else 1.0)
