@@ -7,6 +7,7 @@ singles whose verdict changed.
 Usage::
 
     nice -n 5 python benchmarks/bench_amplitude_refit.py 80101 [SEED ...] [--workers 2]
+        [--out FILE.json]
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 import argparse  # noqa: E402
+import json  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from itertools import combinations  # noqa: E402
 
@@ -72,8 +74,9 @@ def score(rows, key):
         t, got = truth_of(r["label"]), r[key]
         k = ("none otherwise" if t == () else "ooc" if t == ("unexplained",)
              else "singles" if len(t) == 1 else "pairs")
-        ok = {"none otherwise": got[0] != "none", "ooc": got[0] == "unexplained",
-              "singles": got[0] == t[0], "pairs": set(got) == set(t)}[k]
+        ok = (got[0] != "none" if k == "none otherwise" else
+              got[0] == "unexplained" if k == "ooc" else
+              got[0] == t[0] if k == "singles" else set(got) == set(t))
         n[k][0] += int(ok)
         n[k][1] += 1
     return "  ".join(f"{k} {a}/{b}" for k, (a, b) in n.items())
@@ -83,6 +86,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default=None, metavar="FILE.json",
+                    help="also write every case's verdicts")
     args = ap.parse_args()
     jobs = []
     for seed in args.seeds:
@@ -92,6 +97,9 @@ def main():
         jobs += [(lab, seed * 1000 + i) for i, lab in enumerate(labels)]
     with ProcessPoolExecutor(args.workers) as ex:
         rows = list(ex.map(run_case, jobs))
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump(rows, fh, indent=1)
     for key in KEYS:
         print(f"{key:22s} {score(rows, key)}")
     print("singles whose verdict changed (linear -> refit, with std | without std):")

@@ -50,19 +50,23 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ident.lsfd import lsfd
-from ident.pole_uncertainty import modal_std
-from ident.poles import modal_receptance, to_receptance
+from ident.pole_uncertainty import gauss_newton_covariance, modal_std
+from ident.poles import QUANTITY_POWER, modal_receptance, to_receptance
 from ident.refine import noise_weights
 
-__all__ = ["mode_amplitudes", "amplitude_poles", "AMPLITUDE_PASSES"]
+__all__ = ["mode_amplitudes", "amplitude_poles", "AMPLITUDE_PASSES", "SLOPE_F_LEVEL",
+           "BETA_STARTS"]
 
 #: Fits at most: the amplitudes of the linear fit, then those of the previous fit, until
 #: ``ln a`` moves by less than :data:`AMPLITUDE_TOL` at every line.
 AMPLITUDE_PASSES = 8
 AMPLITUDE_TOL = 1e-3
-
-_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
-
+#: The slopes are kept when an F-test says they lower the misfit at this level (else
+#: the linear fit stands: a narrow band or a linear mode cannot tell them).
+SLOPE_F_LEVEL = 1e-3
+#: Damping slopes ``beta`` the first fit starts from (the misfit has local minima in
+#: beta): none, a micro-slip joint's, a quadratic damper's.
+BETA_STARTS = (0.0, 0.4, 1.0)
 
 def _peak(w, a):
     """Peak of the amplitudes ``a`` (K,) over ``w`` (K,): (a_peak, w_peak), a parabola
@@ -110,14 +114,6 @@ def _line_poles(theta, m, sigma0, wd0, u):
     wn_j = np.sqrt(w2_j)
     poles = -z_j * wn_j + 1j * wn_j * np.sqrt(1.0 - z_j**2)
     return poles, -sigma + 1j * wd
-
-
-#: The slopes are kept when an F-test says they lower the misfit at this level (else
-#: the linear fit stands: a narrow band or a linear mode cannot tell them).
-SLOPE_F_LEVEL = 1e-3
-#: Damping slopes ``beta`` the first fit starts from (the misfit has local minima in
-#: beta): none, a micro-slip joint's, a quadratic damper's.
-BETA_STARTS = (0.0, 0.4, 1.0)
 
 
 def _starts(theta, m):
@@ -205,7 +201,7 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
         residues, fitted, _ = lsfd(f, Hn, allp, wt)
         residues, response = residues[:, :m] * scale[:, None], fitted * scale
         wt = noise_weights(f, Hn, allp)
-    cov = _covariance(misfit, sol.x, sigma0, 2 * K * P - n_lin - n_theta)
+    cov = _covariance(misfit, sol.x, sigma0, n_lin)
     s_w2, s_z = modal_std(peak_poles, cov)
     out = []
     for r, md in enumerate(modes):
@@ -214,7 +210,7 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
             md, pole=complex(peak_poles[r]), frequency_hz=float(wn / (2 * np.pi)),
             omega2=float(wn**2), zeta=float(-peak_poles[r].real / wn),
             shape=residues[:, r], omega2_std=float(s_w2[r]), zeta_std=float(s_z[r]),
-            response_at_peak=float(a_ref[r] * peaks[r][1] ** _POWER[quantity]),
+            response_at_peak=float(a_ref[r] * peaks[r][1] ** QUANTITY_POWER[quantity]),
             omega2_slope=float(sol.x[2 * m + r]), zeta_slope=float(sol.x[3 * m + r])))
     return out, None
 
@@ -245,24 +241,12 @@ def _significant(chi0, sol, m, dof):
     return ((chi0 - chi1) / (3 * m)) / (chi1 / dof) > fisher_f.isf(SLOPE_F_LEVEL, 3 * m, dof)
 
 
-def _covariance(misfit, theta, sigma0, dof):
+def _covariance(misfit, theta, sigma0, n_linear):
     """Covariance (2m, 2m) of ``(sigma_1..m, omega_d,1..m)`` at the peak (rad/s), the
-    slopes' share included: ``s^2 (J^T J)^-1`` of the projected residual (central
-    differences in ``theta``), mapped by ``d sigma = sigma d theta_1``,
-    ``d omega_d = sigma0 d theta_2``."""
+    slopes' share included (:func:`ident.pole_uncertainty.gauss_newton_covariance` in
+    ``theta``), mapped by ``d sigma = sigma d theta_1``, ``d omega_d = sigma0 d theta_2``."""
     m = sigma0.size
-    r0 = misfit(theta)
-    J = np.empty((r0.size, theta.size))
-    for k in range(theta.size):
-        h = 1e-6 * max(1.0, abs(theta[k]))
-        e = np.zeros(theta.size)
-        e[k] = h
-        J[:, k] = (misfit(theta + e) - misfit(theta - e)) / (2 * h)
-    if dof <= 0 or not np.all(np.isfinite(J)):
-        return np.full((2 * m, 2 * m), np.nan)
-    s2 = float(r0 @ r0) / dof
-    c = np.linalg.norm(J, axis=0)
-    c[c == 0] = 1.0
-    cov_t = s2 * np.linalg.pinv((J / c).T @ (J / c), rcond=1e-12, hermitian=True) / np.outer(c, c)
+    cov_t = gauss_newton_covariance(misfit, theta, 1e-6 * np.maximum(1.0, np.abs(theta)),
+                                    n_linear)
     g = np.concatenate([sigma0 * np.exp(theta[:m]), sigma0])        # d(sigma, w_d)/d theta
     return cov_t[:2 * m, :2 * m] * np.outer(g, g)

@@ -31,6 +31,34 @@ import numpy as np
 
 from ident.lsfd import lsfd
 
+__all__ = ["gauss_newton_covariance", "pole_covariance", "modal_std"]
+
+
+def gauss_newton_covariance(residual, x, steps, n_linear: int) -> np.ndarray:
+    """``s^2 (J^T J)^-1`` of a projected residual at ``x`` (module doc): ``J`` by central
+    differences with ``steps`` (per parameter), ``s^2 = |r|^2 / (N - n_x - n_linear)``.
+    NaN without residual degrees of freedom; columns that move nothing (or are not
+    finite) are held fixed, and a pseudo-inverse leaves out what the linear parameters
+    can mimic."""
+    x = np.asarray(x, float)
+    r0 = residual(x)
+    J = np.empty((r0.size, x.size))
+    for k in range(x.size):
+        e = np.zeros(x.size)
+        e[k] = steps[k]
+        J[:, k] = (residual(x + e) - residual(x - e)) / (2 * steps[k])
+    dof = r0.size - x.size - n_linear
+    cov = np.full((x.size, x.size), np.nan)
+    if dof <= 0:
+        return cov
+    s2 = float(r0 @ r0) / dof
+    c = np.linalg.norm(J, axis=0)
+    use = np.isfinite(c) & (c > 0) & np.all(np.isfinite(J), axis=0)
+    Js = J[:, use] / c[use]
+    cov[np.ix_(use, use)] = (s2 * np.linalg.pinv(Js.T @ Js, rcond=1e-12, hermitian=True)
+                             / np.outer(c[use], c[use]))
+    return cov
+
 
 def pole_covariance(freq_hz, frf, poles, weights=None) -> np.ndarray:
     """Covariance (2m, 2m) of ``(sigma_1..m, omega_d,1..m)`` of all ``poles`` (rad/s).
@@ -49,38 +77,18 @@ def pole_covariance(freq_hz, frf, poles, weights=None) -> np.ndarray:
     if frf.ndim == 1:
         frf = frf[:, None]
     m = poles.size
-    K, P = frf.shape
+    P = frf.shape[1]
 
-    def resid(sigma, wd):
-        r = lsfd(freq_hz, frf, -sigma + 1j * wd, weights)[2]
+    def resid(x):
+        r = lsfd(freq_hz, frf, -x[:m] + 1j * x[m:], weights)[2]
         return np.concatenate([r.real.ravel(), r.imag.ravel()])
 
-    sigma, wd = -poles.real, poles.imag
-    r0 = resid(sigma, wd)
-    J = np.empty((r0.size, 2 * m))
-    for k in range(2 * m):
-        i = k % m
-        h = 1e-6 * max(abs(poles[i]), 1e-300)
-        step = np.zeros(m)
-        step[i] = h
-        if k < m:
-            J[:, k] = (resid(sigma + step, wd) - resid(sigma - step, wd)) / (2 * h)
-        else:
-            J[:, k] = (resid(sigma, wd + step) - resid(sigma, wd - step)) / (2 * h)
-    dof = 2 * K * P - 2 * m - P * (2 * m + 4)
-    if dof <= 0:
-        return np.full((2 * m, 2 * m), np.nan)
-    s2 = float(r0 @ r0) / dof
-    c = np.linalg.norm(J, axis=0)
     # a pseudo-mode parked far outside the band (near 0 Hz) moves nothing: its columns
     # are dropped (held fixed) and the pseudo-inverse ignores what the residual terms
     # can mimic, so neither voids the modes' uncertainty
-    use = np.isfinite(c) & (c > 0) & np.all(np.isfinite(J), axis=0)
-    cov = np.full((2 * m, 2 * m), np.nan)
-    Js = J[:, use] / c[use]
-    cov[np.ix_(use, use)] = (s2 * np.linalg.pinv(Js.T @ Js, rcond=1e-12, hermitian=True)
-                             / np.outer(c[use], c[use]))
-    return cov
+    h = 1e-6 * np.maximum(np.abs(poles), 1e-300)
+    return gauss_newton_covariance(resid, np.concatenate([-poles.real, poles.imag]),
+                                   np.concatenate([h, h]), P * (2 * m + 4))
 
 
 def modal_std(poles, cov) -> tuple[np.ndarray, np.ndarray]:

@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 QUANTITIES = ("receptance", "mobility", "accelerance")
+#: The power of ``i w`` that turns a receptance into each quantity.
+QUANTITY_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
 
 def pole_to_modal(pole) -> tuple[np.ndarray, np.ndarray]:

@@ -27,7 +27,7 @@ from ident.frf_header import with_overrides
 from ident.identify import identify
 from ident.modal_data import MeasuredData
 from ident.series_table import drive_point, series_table
-from ident.tracking import agree_on_modes
+from ident.tracking import agree_on_modes, one_resonance
 
 
 @dataclass
@@ -83,13 +83,12 @@ def identify_level(s: FRFSet, quantity, band=None, n_modes=None, options=None,
 
 def _fewer_modes(s: FRFSet, quantity, band, n, options, before):
     """Level ``s`` identified again with ``n`` modes (:func:`ident.tracking
-    .agree_on_modes`). A mode of ``before`` that no kept mode's half-power width holds
-    is a resonance the series leaves out: the amplitude-dependent refit would take it
+    .agree_on_modes`). A mode of ``before`` that is not one resonance with a kept mode
+    (:func:`ident.tracking.one_resonance`) is a resonance the series leaves out: the amplitude-dependent refit would take it
     for an amplitude dependence, so the level keeps the linear fit, with a note."""
     res = identify_level(s, quantity, band, n, options)
     left = [m.frequency_hz for m in before.modes
-            if not any(abs(m.frequency_hz - k.frequency_hz) <= k.zeta * k.frequency_hz
-                       for k in res.modes)]
+            if not any(one_resonance([m, k]) for k in res.modes)]
     if left and refits_amplitude(s):
         return replace(res, notes=list(res.notes) + [
             f"a resonance at {', '.join(f'{x:.6g}' for x in left)} Hz left out of this "

@@ -41,7 +41,7 @@ import numpy as np
 from ident.errors import InputError
 from ident.frf_files import FRFSet
 from ident.modal_data import MeasuredData, annotation_warnings
-from ident.poles import modal_receptance
+from ident.poles import QUANTITY_POWER, modal_receptance
 from ident.random_frf import mode_response_rms, random_signature
 from ident.tracking import track_modes
 
@@ -65,8 +65,7 @@ def mode_frf_at_resonance(mode, point: int, quantity: str) -> float:
     (accelerance)."""
     w = mode.pole.imag
     h = modal_receptance(mode.pole, np.atleast_1d(mode.shape)[point], w / (2 * np.pi))
-    power = {"receptance": 0, "mobility": 1, "accelerance": 2}[quantity]
-    return float(abs(h[0, 0]) * w ** power)
+    return float(abs(h[0, 0]) * w ** QUANTITY_POWER[quantity])
 
 
 def _amplitudes(f, mode):
