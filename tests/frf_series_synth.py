@@ -227,3 +227,19 @@ def planted_series(path, freqs_hz, zetas, held, control="response", seed=0, nois
         write_level(p, lev, Hm, Fm, run_order=k + 1, with_force=with_force)
         paths.append(str(p))
     return paths
+
+
+def rattle_series(path, f0=80.0):
+    """Five force-controlled linear levels (``planted_series``), the third with a second,
+    small resonance 0.9 Hz above the mode (a rattle at that level only). Returns
+    (paths, planted natural frequencies Hz, the third level's FRFSet)."""
+    from ident.frf_files import read_frf, write_frf
+
+    fn, zeta = f0 * (1 - 0.001 * np.arange(5)), 0.006 * 1.2 ** np.arange(5)
+    paths = planted_series(path, fn, zeta, 2.0 ** np.arange(5), control="force",
+                           noise=0.002)
+    s = read_frf(paths[2])
+    w, wx = 2 * np.pi * s.freq_hz, 2 * np.pi * (fn[2] + 0.9)
+    s.frf[:, 0] += 0.01 / (2.5e5 / wx ** 2 * (wx ** 2 - w ** 2 + 2j * 0.002 * wx * w))
+    write_frf(paths[2], s)
+    return paths, fn, s

@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from frf_series_synth import rattle_series
+
 from ident.frf_files import FRFSet
 from ident.identify import identify
 from ident.series import identify_level, identify_series
@@ -60,14 +62,19 @@ def _set(f, H, force):
                   reference="1", source="level", control="force")
 
 
-@pytest.mark.parametrize("seed", [3, 11, 29])
-def test_refit_recovers_the_backbone_at_the_peak(seed):
+def _both_fits(seed, strength):
+    """(law, true peak amplitude, refitted mode, linear mode) of one drawn level."""
     rng = np.random.default_rng(seed)
-    law = _backbone(rng, strength=3.0)
+    law = _backbone(rng, strength)
     force = law["w0"] ** 2 * 2 * law["z0"] * law["a0"]
     f, H, peak = _level(law, force, 60, 2e-3, rng)
     new = identify_level(_set(f, H, force), "receptance", n_modes=1, amplitude=True).modes[0]
-    lin = identify(f, H, n_modes=1).modes[0]
+    return law, peak, new, identify(f, H, n_modes=1).modes[0]
+
+
+@pytest.mark.parametrize("seed", [3, 11, 29])
+def test_refit_recovers_the_backbone_at_the_peak(seed):
+    law, peak, new, lin = _both_fits(seed, 3.0)
     w2, z = _at(law, peak)
     # the linear fit is biased by the amplitudes it averages over (the planted effect)
     lin_w2, lin_z = lin.omega2 / w2 - 1, lin.zeta / z - 1
@@ -91,12 +98,7 @@ def test_a_linear_level_keeps_its_linear_fit():
     """No amplitude dependence: the slopes do not pass the F-test, the linear fit stands
     (and it recovers the planted pole)."""
     for seed in (7, 8, 9):
-        rng = np.random.default_rng(seed)
-        law = _backbone(rng, strength=0.0)
-        force = law["w0"] ** 2 * 2 * law["z0"] * law["a0"]
-        f, H, _ = _level(law, force, 60, 2e-3, rng)
-        new = identify_level(_set(f, H, force), "receptance", n_modes=1, amplitude=True).modes[0]
-        lin = identify(f, H, n_modes=1).modes[0]
+        law, _, new, lin = _both_fits(seed, 0.0)
         assert new.omega2 == lin.omega2 and new.zeta == lin.zeta
         assert np.isnan(new.omega2_slope) and np.isnan(new.response_at_peak)
         assert abs(new.omega2 - law["w0"] ** 2) < 4 * new.omega2_std
@@ -131,19 +133,9 @@ def test_a_level_whose_band_holds_a_resonance_the_series_leaves_out_keeps_its_li
     level, which the series identifies with one mode): with the refit that level keeps
     its linear fit and says why (the slopes took the rattle for an amplitude dependence,
     the pole 14 of its standard uncertainties off); the planted values come back."""
-    import sys
-    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-    from frf_series_synth import planted_series
-    from ident.frf_files import write_frf
     from ident.series import read_series_sets
 
-    fn, zeta = 80.0 * (1 - 0.001 * np.arange(5)), 0.006 * 1.2 ** np.arange(5)
-    paths = planted_series(tmp_path, fn, zeta, 2.0 ** np.arange(5), control="force",
-                           noise=0.002)
-    s = read_series_sets([paths[2]])[0]
-    w, wx = 2 * np.pi * s.freq_hz, 2 * np.pi * (fn[2] + 0.9)
-    s.frf[:, 0] += 0.01 / (2.5e5 / wx ** 2 * (wx ** 2 - w ** 2 + 2j * 0.002 * wx * w))
-    write_frf(paths[2], s)
+    paths, fn, _ = rattle_series(tmp_path)
     fits = identify_series(read_series_sets(paths), check_band=False, amplitude_refit=True)
     assert any("left out of this level's band: linear fit kept" in w
                for w in fits[2].warnings[0])

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from cli.main import main
-from frf_series_synth import (JointedChain, band_lines, noisy, planted_series, simulate_level,
+from frf_series_synth import (JointedChain, band_lines, noisy, planted_series, rattle_series,
+                              simulate_level,
                               write_level)
 from ident.errors import InputError
 from ident.identify import identify
@@ -217,14 +218,7 @@ def test_a_level_with_an_extra_mode_is_refitted_with_the_common_count(tmp_path):
     """One level shows a second, small resonance 0.9 Hz away (a rattle at that level
     only): the other four levels agree on one mode, so that level is identified again
     with one and says so; the series is one track with the planted values."""
-    fn, zeta = F0 * (1 - 0.001 * np.arange(5)), 0.006 * 1.2 ** np.arange(5)
-    paths = planted_series(tmp_path, fn, zeta, 2.0 ** np.arange(5), control="force",
-                           noise=0.002)
-    s = read_series_sets([paths[2]])[0]
-    w, wx = 2 * np.pi * s.freq_hz, 2 * np.pi * (fn[2] + 0.9)
-    s.frf[:, 0] += 0.01 / (2.5e5 / wx ** 2 * (wx ** 2 - w ** 2 + 2j * 0.002 * wx * w))
-    from ident.frf_files import write_frf
-    write_frf(paths[2], s)
+    paths, fn, s = rattle_series(tmp_path, F0)
     assert len(identify(s.freq_hz, s.frf).modes) == 2           # the precondition
     fits = identify_series(read_series_sets(paths), check_band=False)
     note = fits[2].warnings[0][0]
