@@ -26,8 +26,7 @@ from ident.frf_header import CONTROLS, FRF_TESTS
 from ident.poles import QUANTITIES
 from ident.series import load_series
 
-__all__ = ["add_series_arguments", "add_amplitude_refit", "check_series_args",
-           "series_from_args", "progress_bar"]
+__all__ = ["add_series_arguments", "check_series_args", "series_from_args", "progress_bar"]
 
 
 def add_series_arguments(parser, required: bool = True, files_help: str | None = None) -> None:
@@ -55,12 +54,12 @@ def add_series_arguments(parser, required: bool = True, files_help: str | None =
                        help="test type of every FRF file (overrides the files; default "
                             "stepped-sine): random = H1 averaged over broadband random "
                             "excitation, --excitation its drive RMS")
-    add_amplitude_refit(group)
+    _add_amplitude_refit(group)
     group.add_argument("--rows", type=int, default=DEFAULT_ROWS, metavar="N",
                        help="free-decay record: geometric amplitude bins along the decay")
 
 
-def add_amplitude_refit(group) -> None:
+def _add_amplitude_refit(group) -> None:
     """``--amplitude-refit``: force-controlled levels refitted at their peak amplitudes
     (:mod:`ident.amplitude_poles`)."""
     group.add_argument("--amplitude-refit", action="store_true",

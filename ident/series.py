@@ -6,7 +6,9 @@ level (:mod:`ident.frf_files`; its header says what the level held, ``control``,
 (:func:`ident.identify.identify`) and then makes the levels agree on the number of
 modes in the band (:func:`ident.tracking.agree_on_modes`: two poles on one resonance
 become one; a level with more modes than most levels is identified again with the
-common number; the level's warnings say so). Each mode gets the warnings of
+common number; the level's warnings say so). With ``amplitude_refit`` (opt-in) a
+force-controlled level's poles are refitted at their peak amplitudes
+(:mod:`ident.amplitude_poles`). Each mode gets the warnings of
 :mod:`ident.fit_quality` (fit error, stability, band sensitivity).
 :func:`ident.series_table.series_table` turns the levels into the measured-data table.
 :func:`load_series` reads either a measured-data table or the FRF files of a series
@@ -83,9 +85,10 @@ def identify_level(s: FRFSet, quantity, band=None, n_modes=None, options=None,
 
 def _fewer_modes(s: FRFSet, quantity, band, n, options, before):
     """Level ``s`` identified again with ``n`` modes (:func:`ident.tracking
-    .agree_on_modes`). A mode of ``before`` that is not one resonance with a kept mode
-    (:func:`ident.tracking.one_resonance`) is a resonance the series leaves out: the amplitude-dependent refit would take it
-    for an amplitude dependence, so the level keeps the linear fit, with a note."""
+    .agree_on_modes`), with the amplitude-dependent refit. A mode of ``before`` that is
+    not one resonance with a kept mode (:func:`ident.tracking.one_resonance`) is a
+    resonance the series leaves out, which the refit would take for an amplitude
+    dependence: the level then keeps the linear fit, with a note."""
     res = identify_level(s, quantity, band, n, options)
     left = [m.frequency_hz for m in before.modes
             if not any(one_resonance([m, k]) for k in res.modes)]
@@ -134,12 +137,12 @@ def identify_series(sets, band=None, n_modes=None, quantity=None, options=None,
             f.result = res
     for k, f in enumerate(fits):
         s = f.frfset
-        def refit(freq_hz, frf, narrow, s=s):
+        def narrow_refit(freq_hz, frf, narrow, s=s):
             return with_amplitude_poles(s, freq_hz, frf, "receptance", narrow)
 
         f.warnings = [notes[k] + list(f.result.notes) + mode_warnings(
             f.result, i, band_shift(s.freq_hz, s.frf, f.quantity, f.result, i, options,
-                                    refit if amplitude_refit else None)
+                                    narrow_refit if amplitude_refit else None)
             if check_band else None) for i in range(len(f.result.modes))]
     return fits
 

@@ -5,12 +5,12 @@ of :func:`ident.series.identify_series` across levels (:func:`ident.tracking.tra
 and writes one row per mode and level:
 
 * force control: ``excitation`` = the held level; ``response_amplitude`` = the
-  drive-point amplitude at the mode's peak to which its refitted pole refers
-  (``response_at_peak`` of :mod:`ident.amplitude_poles`: the measured response, the
-  mode's share of it); where the refit was not used, the identified mode's amplitude
-  at its resonance ``omega_d``, ``|H_r(omega_d)| F``: the mode's own FRF (residue over
-  pole and its conjugate) in the file's quantity (m, m/s or m/s^2 per N) times the
-  measured force there (the ``force`` column, interpolated) or else the held level;
+  identified mode's amplitude at its resonance ``omega_d`` at the drive point,
+  ``|H_r(omega_d)| F``: the mode's own FRF (residue over pole and its conjugate) in the
+  file's quantity (m, m/s or m/s^2 per N) times the measured force there (the ``force``
+  column, interpolated) or else the held level; where the amplitude-dependent refit was
+  used (:mod:`ident.amplitude_poles`), the peak amplitude its pole refers to
+  (``response_at_peak``);
 * response control: ``response_amplitude`` = the held level; ``excitation`` = the force
   at resonance: the ``force`` column at ``omega_d``, else the held level over the
   measured ``|H(omega_d)|`` (interpolated between lines).

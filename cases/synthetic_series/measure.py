@@ -8,7 +8,7 @@ the files. A repeated level is identified on its own and joins the table as a ro
 the same ``level`` with its own ``run_order`` (``measured-data.md``, Repeats).
 
 Visibility (stored in the truth): every run simulated noise-free with all mechanisms
-and with one taken out, each level identified (:func:`ident.series.identify_level`, relative
+and with one taken out, each level identified (:func:`ident.identify.identify`, relative
 weighting: noise-free FRFs need no noise model); the
 range over the runs of the change in omega2 and in zeta, each in units of the run's
 noise ``sqrt(sigma_id^2 + sigma_rep^2)`` (``sigma_id`` the noisy identification's std
@@ -23,8 +23,9 @@ import numpy as np
 from cases.synthetic_series.rig import noisy, resonance, solve_level
 from ident.errors import InputError
 from ident.frf_files import FRFSet
+from ident.identify import identify
 from ident.modal_data import MeasuredData
-from ident.series import identify_level, identify_series
+from ident.series import identify_series
 from ident.series_table import series_table
 
 __all__ = ["place_lines", "simulate_runs", "identify_table", "honest_visibility",
@@ -116,7 +117,7 @@ def identify_table(sims, plan) -> MeasuredData:
     return data
 
 
-def _identified(sims, plan):
+def _identified(sims):
     out = []
     for s in sims:
         H = s["frf"]
@@ -125,10 +126,9 @@ def _identified(sims, plan):
                 H = s["frf"] * (1 + tiny * np.cos(np.arange(H.size) * 2.39996))
             try:
                 with np.errstate(all="ignore"):
-                    m = identify_level(_set(dict(s, frf=H), plan), "receptance", n_modes=1,
-                                       options={"weighting": "relative"}).modes[0]
+                    m = identify(s["freq_hz"], H, n_modes=1, weighting="relative").modes[0]
                 break
-            except (InputError, ValueError, IndexError, np.linalg.LinAlgError):
+            except (ValueError, IndexError, np.linalg.LinAlgError):
                 m = None
         if m is None:
             raise Refused("a noise-free level could not be identified")
@@ -140,7 +140,7 @@ def honest_visibility(st, plan, table, mechanisms):
     """Per mechanism: range of the identified change over the runs in noise units
     (module doc), and the noise-free identified values with and without it."""
     free = simulate_runs(None, st, plan, with_noise=False)
-    full = _identified(free, plan)
+    full = _identified(free)
     rows = {(int(lv), int(ro)): i for i, (lv, ro) in enumerate(zip(table.level, table.run_order))}
     idx = [rows[(v + 1, run.k)] for v, run, _ in plan.runs]
     u_w = np.hypot(table.omega2_std[idx], 2 * plan.s_f * full[:, 0])
@@ -149,7 +149,7 @@ def honest_visibility(st, plan, table, mechanisms):
     for m in mechanisms:
         try:
             osims = simulate_runs(None, st.without(m), plan, with_noise=False)
-            other = _identified(osims, plan)
+            other = _identified(osims)
         except Refused:
             out.append(dict(family=m.family, visibility=None, reason="without it the "
                             "response folds"))
