@@ -146,3 +146,25 @@ def test_estimate_averages_repeats_per_level_and_says_so():
     assert mean.omega2[0] == pytest.approx(d.omega2[[0, 10]].mean(), rel=1e-15)
     assert mean.zeta_std[0] == pytest.approx(np.hypot(*d.zeta_std[[0, 10]]) / 2)
     assert est.chi == pytest.approx(estimate(mean, method="exact").chi, rel=1e-12)
+
+
+def test_rows_identified_at_their_peak_carry_no_response_distortion():
+    """A table from ``identify --amplitude-refit`` (finite ``x_omega2_slope``): its
+    response channel is the measured peak, so the judge adds no distortion error
+    (``0.17 |d ln zeta / d ln s|``) to it; without the column it does, and by that much
+    (the repeatability alone is below it here: response noise 0.5 %, the error ~1 %)."""
+    from inverse.diagnosis.noise import distortion
+    from inverse.diagnosis.run import level_means_and_noise, observations_from
+
+    plain = _series(6, s_f=0.0, s_z=0.0)
+    refit = _series(6, s_f=0.0, s_z=0.0)
+    refit.extra = {"x_omega2_slope": np.array(["-0.01"] * len(refit))}   # as a CSV reads
+    noise = {}
+    for name, data in (("plain", plain), ("refit", refit)):
+        obs, d, stds, raw, _ = observations_from(data)
+        noise[name] = level_means_and_noise(obs, d, stds, raw)[0]
+    e = distortion(np.log(obs.s), obs.zeta, obs.levels)
+    r_plain = noise["plain"].repeatability["response"]
+    r_refit = noise["refit"].repeatability["response"]
+    assert np.all(np.abs(r_plain**2 - r_refit**2 - e**2) < 1e-6 * r_plain**2 + 1e-15)
+    assert np.median(e) > 1.5 * np.median(r_refit)

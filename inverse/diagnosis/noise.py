@@ -49,14 +49,19 @@ def distortion(log_s, zeta, levels=None):
     return 0.17 * np.abs(log_slope(levels, np.asarray(log_s), np.log(zeta)))
 
 
-def one_mode_noise(obs, stds: dict, abscissa, run_order) -> NoiseModel:
+def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None) -> NoiseModel:
     """The judge's noise model of ``obs`` (:class:`inverse.diagnosis.models.Observations`)
-    with the table's ``stds`` (``{channel: (n,) or None}``)."""
+    with the table's ``stds`` (``{channel: (n,) or None}``). ``at_peak`` (n,) bool: rows
+    whose pole and response were identified at the level's peak amplitude
+    (``iwanfe identify --amplitude-refit``, :mod:`ident.amplitude_poles`): no
+    distortion error on their response."""
     values = {"omega2": obs.omega2, "zeta": obs.zeta}
     error = {}
     if obs.log_r is not None:
         values["response"] = obs.log_r
         error["response"] = distortion(np.log(obs.s), obs.zeta, obs.levels)
+        if at_peak is not None:
+            error["response"] = np.where(at_peak, 0.0, error["response"])
     return noise_model(abscissa, values, stds, obs.levels, run_order,
                        floors={"response": RESPONSE_FLOOR}, model_error=error)
 

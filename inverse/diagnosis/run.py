@@ -153,6 +153,21 @@ def _candidates(fits, cv, obs, refuted):
     return out
 
 
+def _at_peak(d):
+    """Rows identified at their level's peak amplitude (a finite ``x_omega2_slope``,
+    :mod:`ident.amplitude_poles`), or None without that column."""
+    col = d.extra.get("x_omega2_slope")
+    if col is None:
+        return None
+
+    def finite(v):
+        try:
+            return bool(np.isfinite(float(v)))
+        except ValueError:
+            return False
+    return np.array([finite(v) for v in col])
+
+
 def level_means_and_noise(obs, d, stds, raw):
     """The judge's noise model of one mode (identification plus repeatability,
     :func:`inverse.diagnosis.noise.one_mode_noise`; sets ``obs.sigma``), the level means
@@ -160,7 +175,7 @@ def level_means_and_noise(obs, d, stds, raw):
     command states contradictions against. Arguments: :func:`observations_from`'s.
 
     Returns (noise model, level means, :class:`inverse.contradictions.NoiseLevels`)."""
-    noise = one_mode_noise(obs, stds, raw, d.run_order)
+    noise = one_mode_noise(obs, stds, raw, d.run_order, _at_peak(d))
     obs.sigma = noise.total
     dm, _ = mean_per_level(d)
     first = np.r_[0, np.flatnonzero(np.diff(obs.levels)) + 1]
