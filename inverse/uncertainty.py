@@ -80,6 +80,20 @@ def _cholesky2(cov) -> np.ndarray:
     return np.array([[l11, 0.0], [l21, l22]])
 
 
+def truncated_draw(seed, mean, factor, dof, admissible, max_draws):
+    """One draw of ``mean + s L z`` (``z`` standard normal, ``s = sqrt(dof / chi2_dof)``,
+    1 for ``dof = inf``: a multivariate Student t) from ``np.random.default_rng(seed)``,
+    redrawn until ``admissible(x)``: (x, number of draws), or None after ``max_draws``."""
+    rng = np.random.default_rng(seed)
+    for n in range(1, max_draws + 1):
+        z = rng.standard_normal(len(mean))
+        s = 1.0 if math.isinf(dof) else math.sqrt(dof / rng.chisquare(dof))
+        x = mean + s * (factor @ z)
+        if admissible(x):
+            return x, n
+    return None
+
+
 @dataclass(frozen=True)
 class ParameterDistribution:
     """Distribution (1) of ``x = (p, ln Kt)``, ``p = chi + 1``, ``Kt = p |kappa1| B``.
@@ -156,16 +170,11 @@ class ParameterDistribution:
         (x (2,), n_draws)
             The draw and the number of draws it took (rejections + 1).
         """
-        rng = np.random.default_rng(seed)
-        L = self.factor
         lo, hi = self.p_bounds
-        for n in range(1, self.max_draws + 1):
-            z = rng.standard_normal(2)
-            s = 1.0 if math.isinf(self.dof) else math.sqrt(self.dof / rng.chisquare(self.dof))
-            x = np.array([self.mean[0] + s * (L[0, 0] * z[0]),
-                          self.mean[1] + s * (L[1, 0] * z[0] + L[1, 1] * z[1])])
-            if lo < x[0] < hi:
-                return x, n
+        got = truncated_draw(seed, np.asarray(self.mean, float), self.factor, self.dof,
+                             lambda x: lo < x[0] < hi, self.max_draws)
+        if got is not None:
+            return got
         raise ValueError(f"no draw with {lo:g} < chi + 1 < {hi:g} in {self.max_draws} tries: "
                          f"the fit puts almost no mass in the Iwan range")
 
@@ -245,14 +254,11 @@ class FitDistribution:
 
     def draw(self, seed) -> tuple[np.ndarray, int]:
         """One draw inside the bounds from ``np.random.default_rng(seed)``; (x, draws)."""
-        rng = np.random.default_rng(seed)
-        L = self.factor
-        for n in range(1, self.max_draws + 1):
-            z = rng.standard_normal(len(self.names))
-            s = 1.0 if math.isinf(self.dof) else math.sqrt(self.dof / rng.chisquare(self.dof))
-            x = self.mean + s * (L @ z)
-            if np.all((self.lower <= x) & (x <= self.upper)):
-                return x, n
+        got = truncated_draw(seed, self.mean, self.factor, self.dof,
+                             lambda x: np.all((self.lower <= x) & (x <= self.upper)),
+                             self.max_draws)
+        if got is not None:
+            return got
         raise ValueError(f"no draw inside the parameters' bounds in {self.max_draws} tries")
 
     def values(self, x) -> dict:
