@@ -141,3 +141,30 @@ def test_a_level_whose_band_holds_a_resonance_the_series_leaves_out_keeps_its_li
                for w in fits[2].warnings[0])
     d = series_table(fits)
     assert np.all(np.abs(d.omega2 - (2 * np.pi * fn) ** 2) < 4 * d.omega2_std)
+
+
+def test_identify_says_which_levels_are_at_their_peak(tmp_path, capsys):
+    """``iwanfe identify --amplitude-refit`` names the refitted levels; without the
+    option the line is absent and the table's slopes are empty."""
+    from cli.main import main
+    from ident.frf_files import write_frf
+    from ident.measured import read_measured
+
+    rng = np.random.default_rng(3)
+    law = _backbone(rng, 3.0)
+    force = law["w0"] ** 2 * 2 * law["z0"] * law["a0"]
+    paths = []
+    for k, scale in enumerate((0.3, 0.5, 0.8, 1.2)):
+        f, H, _ = _level(law, scale * force, 60, 2e-3, rng)
+        paths.append(str(tmp_path / f"level_{k + 1}.csv"))
+        write_frf(paths[-1], FRFSet(f, H[:, None], ["1"], quantity="receptance",
+                                    excitation=scale * force, reference="1",
+                                    control="force", run_order=k + 1))
+    assert main(["identify", *paths, "--amplitude-refit", "--no-band-check",
+                 "--out", str(tmp_path / "t.csv")]) == 0
+    assert "peak amplitude (fitted with their slopes" in capsys.readouterr().out
+    t = read_measured(str(tmp_path / "t.csv"))
+    slopes = [float(v) if str(v).strip() else np.nan for v in t.extra["x_omega2_slope"]]
+    assert np.sum(np.isfinite(slopes)) >= 3
+    assert main(["identify", *paths, "--no-band-check"]) == 0
+    assert "peak amplitude" not in capsys.readouterr().out

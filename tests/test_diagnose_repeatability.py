@@ -168,3 +168,5 @@ def test_rows_identified_at_their_peak_carry_no_response_distortion():
     r_refit = noise["refit"].repeatability["response"]
     assert np.all(np.abs(r_plain**2 - r_refit**2 - e**2) < 1e-6 * r_plain**2 + 1e-15)
     assert np.median(e) > 1.5 * np.median(r_refit)
+    assert any("identified at their peak amplitude" in w
+               for w in diagnose(refit)["data_warnings"])

@@ -177,6 +177,13 @@ def _print_levels(table):
               f"{table.response_amplitude[i]:11.4g} {table.mode[i]:4d} {f:12.5f} {s_f:8.2g} "
               f"{table.zeta[i]:9.6f} {s_z:8.2g} {100 * x['x_fit_error'][i]:8.3g} "
               f"{x['x_mac'][i]:6.4f}")
+    refit = np.isfinite(np.asarray(x.get("x_omega2_slope", []), float))
+    if refit.any():
+        rest = ("" if refit.all() else "; the other levels keep the linear fit (the slopes "
+                "did not lower the misfit significantly, or a warning says why)")
+        print(f"  frequency, zeta and response at each level's peak amplitude (fitted with "
+              f"their slopes across the band, --amplitude-refit) at levels "
+              f"{', '.join(map(str, np.unique(table.level[refit])))}{rest}")
     for w in table.warnings:
         print(f"warning: {w}")
 

@@ -231,6 +231,11 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     """
     obs, d, stds, raw, warnings = observations_from(data, mode)
     noise, dm, mean_noise = level_means_and_noise(obs, d, stds, raw)
+    peak = _at_peak(d)
+    if peak is not None and peak.any():
+        warnings.append(f"levels {', '.join(map(str, np.unique(d.level[peak])))} were "
+                        "identified at their peak amplitude (--amplitude-refit): their "
+                        "response carries no identification-distortion error")
     untestable = {c: CATALOGUE[c].testable(obs)[1] for c in CAUSES
                   if not CATALOGUE[c].testable(obs)[0]}
     models = [m for m in MODELS if not set(m.causes) & set(untestable)]
