@@ -46,6 +46,11 @@ class MeasuredData:
         1-based line number of each entry in the source file (0 if not from a file).
     source : str
         The file name the data came from ("" if built in memory).
+    rig_repeatability : tuple or None
+        What the user states of the rig's run-to-run repeatability: (relative sd of the
+        natural frequency, relative sd of the damping ratio, degrees of freedom of that
+        statement); None: the judge assumes a typical rig
+        (:data:`inverse.judge.prior.RIG_REPEATABILITY`); zeros: assume nothing.
     """
 
     level: np.ndarray
@@ -63,6 +68,7 @@ class MeasuredData:
     warnings: list = field(default_factory=list)
     line: np.ndarray | None = None
     source: str = ""
+    rig_repeatability: tuple | None = None
 
     def __post_init__(self):
         self.level = np.asarray(self.level, dtype=int)

@@ -13,6 +13,7 @@ import pytest
 
 from ident.modal_data import MeasuredData
 from inverse.diagnose import diagnose
+from inverse.judge.prior import RIG_REPEATABILITY
 from joints.describing import describing_function
 from joints.iwan import IwanParameters
 
@@ -76,7 +77,8 @@ def test_repeats_give_the_noise_and_identification_only_changes_the_verdict():
     d = _series(7, repeats=(1, 2, 4, 6, 8, 10))
     r = diagnose(d)
     n = r["noise"]["omega2"]
-    assert n["kind"] == "repeats" and n["dof"] == 6
+    # six repeated runs (6 dof) pooled with the assumed rig repeatability's 2 dof
+    assert n["kind"] == "repeats+assumed" and n["dof"] == 6 + RIG_REPEATABILITY.dof
     # the planted 0.05 % in frequency is 0.1 % in omega2
     assert 0.3e-3 < n["total_rel"] < 3e-3
     assert r["verdict_identification_only"] is not None

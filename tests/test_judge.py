@@ -54,7 +54,7 @@ def test_noise_model_from_repeats_splits_identification_and_repeatability():
     omega2 = w2 * (1 + rep_rel * rng.standard_normal(18) + id_rel * rng.standard_normal(18))
     zeta = np.full(18, 0.01) * (1 + 0.03 * rng.standard_normal(18))
     nm = noise_model(exc, {"omega2": omega2, "zeta": zeta},
-                     {"omega2": id_rel * omega2, "zeta": None}, lv, np.arange(18))
+                     {"omega2": id_rel * omega2, "zeta": None}, lv, np.arange(18), prior=None)
     assert nm.dof["omega2"] == 12 and nm.kind["omega2"] == "repeats"
     assert "repeats of 6 levels (12 dof)" == nm.source["omega2"]
     lo, hi = (math.sqrt(stats.chi2.ppf(q, 12) / 12) for q in (5e-4, 1 - 5e-4))

@@ -84,7 +84,7 @@ def test_every_channel_takes_its_own_chosen_curve():
         n = x.size
         resp = 0.3 * np.sin(3 * x) + 0.05 * rng.standard_normal(n)
         nm = noise_model(np.exp(x), {"omega2": np.exp(lw), "zeta": np.exp(lz), "resp": resp},
-                         {}, np.arange(n), run_order=t)
+                         {}, np.arange(n), run_order=t, prior=None)
         for c, y in (("omega2", lw), ("zeta", lz), ("resp", resp)):
             sd, dof = smooth_scatter(x, y, None if np.all(np.diff(t) > 0) else t)
             got = nm.repeatability[c] / (np.exp(y) if c != "resp" else 1.0)
@@ -142,7 +142,7 @@ def test_a_run_order_term_fitted_on_the_repeats_costs_them_its_dof():
         lw2 = np.r_[lw, lw[again] + sf * rng.standard_normal(k)]
         lw2 -= np.where(t >= rng.integers(2, n + k - 1), rng.uniform(15, 40) * sf, 0.0)
         nm = noise_model(np.exp(np.r_[x, x[again]]), {"omega2": np.exp(lw2)}, {},
-                         np.r_[np.arange(n), again], run_order=t)
+                         np.r_[np.arange(n), again], run_order=t, prior=None)
         if nm.kind["omega2"] == "repeats":
             ratio.append(float(np.median(nm.repeatability["omega2"] / np.exp(lw2))) ** 2
                          / sf**2)
@@ -168,7 +168,7 @@ def test_a_scatter_within_the_identifications_noise_is_not_taken_as_repeatabilit
             rep = rep_factor * sf
             w2 = w2 * np.exp(rep * rng.standard_normal(w2.size))
             nm = noise_model(np.exp(x), {"omega2": w2}, {"omega2": sf * w2},
-                             np.arange(w2.size), t)
+                             np.arange(w2.size), t, prior=None)
             out.append(nm.kind["omega2"] == "identification")
             if rep_factor:
                 ratio.append(np.median(nm.repeatability["omega2"] / w2) / rep)

@@ -23,6 +23,7 @@ def _digest(d) -> str:
     h = hashlib.sha256()
     for a in (d.level, d.excitation, d.omega2, d.zeta, d.run_order, d.omega2_std, d.zeta_std):
         h.update(b"-" if a is None else np.ascontiguousarray(a, dtype=float).tobytes())
+    h.update(repr(d.rig_repeatability).encode())
     return h.hexdigest()
 
 

@@ -110,7 +110,8 @@ def fe_noise(data):
         data.excitation / (data.zeta * data.omega2)
     jn = judge.noise_model(x, {"omega2": data.omega2, "zeta": data.zeta},
                            {"omega2": data.omega2_std, "zeta": data.zeta_std},
-                           data.level, data.run_order)
+                           data.level, data.run_order,
+                           prior=judge.prior_for(data.rig_repeatability))
     dof = [jn.dof[c] for c in ("omega2", "zeta")]
     words = "; ".join(f"{c}: {jn.source[c]}" for c in ("omega2", "zeta"))
     return jn, NoiseModel(jn.total["omega2"], jn.total["zeta"], words,

@@ -60,7 +60,8 @@ class UpdateSettings:
     levels, the force scale (N per excitation unit, assumed), the profile
     confidence, the K_T grid (log10 N/m), the points per profile branch, whether to
     refit under changed assumptions, which parameters to profile (``bound``: those on a
-    bound; ``all``)."""
+    bound; ``all``), what the user states of the rig's repeatability
+    (:attr:`ident.modal_data.MeasuredData.rig_repeatability`)."""
 
     data_path: str | None = None
     mode_label: int = 2
@@ -71,6 +72,7 @@ class UpdateSettings:
     profile_points: int = 3
     assumptions: bool = False
     profiles: str = "bound"
+    rig_repeatability: tuple | None = None
 
     def __post_init__(self):
         if not (math.isfinite(self.force_scale) and self.force_scale > 0):
@@ -87,6 +89,7 @@ def load_levels(settings: UpdateSettings):
     if settings.data_path is None:
         raise ValueError("no measured data: give --data (the case names none)")
     data = read_measured(settings.data_path).for_mode(settings.mode_label)
+    data.rig_repeatability = settings.rig_repeatability
     abscissa_of(data)                      # a series no FE route models: one line
     if len(data) < 5:
         raise ValueError(f"mode {settings.mode_label}: {len(data)} levels in the data, "

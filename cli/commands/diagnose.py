@@ -15,6 +15,7 @@ from pathlib import Path
 from cli import validate
 from cases.registry import resolve_case
 from cli.commands.diagnose_report import noise_words
+from cli.rig_options import add_rig_argument, rig_from_args
 from cli.series_options import add_series_arguments, series_from_args
 from ident.errors import InputError
 from ident.measured import read_measured
@@ -57,6 +58,7 @@ def register(subparsers) -> None:
                         help="with FILE and --case (a case with a joint setup): also "
                              "predict every level from the FE backbone (EPMC) of the joint estimated from the levels "
                              "below the top three (iwanfe estimate --backbone)")
+    add_rig_argument(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="write report.md, diagnosis.json and the PNG figures there")
@@ -238,6 +240,7 @@ def run(args) -> int:
         validate.output_dir(args.out, "--out")   # cli.validate: one output-path rule
     args.file = " ".join(args.files) or None
     data, truth = load(args.file, args.case, args)
+    data.rig_repeatability = rig_from_args(args)
     source = args.file or args.case
     result = diagnose(data, mode=args.mode)
     if truth is not None:

@@ -15,6 +15,7 @@ import math
 
 from cli import validate
 from cases.registry import resolve_case
+from cli.rig_options import add_rig_argument, rig_from_args
 from cli.series_options import add_series_arguments, series_from_args
 from inverse.estimate import (
     DEFAULT_CONFIDENCE,
@@ -47,6 +48,7 @@ def register(subparsers) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_series_arguments(parser)
+    add_rig_argument(parser)
     parser.add_argument("--case", metavar="NAME|FILE", default=None,
                         help="FE model for B~ and R~: a shipped case or a case file "
                              "(without it B and R are null)")
@@ -79,6 +81,7 @@ def run(args) -> int:
     if args.plot:
         validate.output_file(args.plot, "--plot", (".png",))   # cli.validate: one rule
     data = series_from_args(args)
+    data.rig_repeatability = rig_from_args(args)
     model = None if args.case is None else resolve_case(args.case).fe_model()
     est = estimate(data, fit_levels=args.fit_levels, method=args.method, mode=args.mode,
                    model=model, case_name=args.case or "model", force_scale=args.force_scale,

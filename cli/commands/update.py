@@ -10,6 +10,7 @@ import argparse
 from pathlib import Path
 
 from cli.executor_options import add_executor_arguments, executor_from_args
+from cli.rig_options import add_rig_argument, rig_from_args
 from runs.jsonio import print_json
 
 NAME = "update"
@@ -63,6 +64,7 @@ def register(subparsers) -> None:
     parser.add_argument("--assumptions", action="store_true",
                         help="also refit under each assumed property of the case changed "
                              "(E, rho, masses, joint elements; slower)")
+    add_rig_argument(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     add_executor_arguments(parser)
     parser.set_defaults(func=run)
@@ -78,7 +80,8 @@ def run(args) -> int:
     result = update(executor=spec, progress=True, store=store, data_path=args.data,
                     mode_label=args.mode, fit_levels=args.fit_levels,
                     force_scale=args.force_scale, profiles=args.profiles,
-                    assumptions=args.assumptions)
+                    assumptions=args.assumptions,
+                    rig_repeatability=rig_from_args(args))
     if args.out:
         write_update(result, args.out)
     s = summary(result)

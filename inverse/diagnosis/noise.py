@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from inverse.judge import NoiseModel, noise_model
+from inverse.judge.prior import RIG_REPEATABILITY
 
 __all__ = ["RESPONSE_FLOOR", "distortion", "log_slope", "one_mode_noise", "test_chi2"]
 
@@ -49,12 +50,14 @@ def distortion(log_s, zeta, levels=None):
     return 0.17 * np.abs(log_slope(levels, np.asarray(log_s), np.log(zeta)))
 
 
-def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None) -> NoiseModel:
+def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None,
+                   prior=RIG_REPEATABILITY) -> NoiseModel:
     """The judge's noise model of ``obs`` (:class:`inverse.diagnosis.models.Observations`)
     with the table's ``stds`` (``{channel: (n,) or None}``). ``at_peak`` (n,) bool: rows
     whose pole and response were identified at the level's peak amplitude
     (``iwanfe identify --amplitude-refit``, :mod:`ident.amplitude_poles`): no
-    distortion error on their response."""
+    distortion error on their response. ``prior``: the assumed rig repeatability
+    (:mod:`inverse.judge.prior`; None: the data's estimate alone)."""
     values = {"omega2": obs.omega2, "zeta": obs.zeta}
     error = {}
     if obs.log_r is not None:
@@ -63,7 +66,7 @@ def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None) -> NoiseM
         if at_peak is not None:
             error["response"] = np.where(at_peak, 0.0, error["response"])
     return noise_model(abscissa, values, stds, obs.levels, run_order,
-                       floors={"response": RESPONSE_FLOOR}, model_error=error)
+                       floors={"response": RESPONSE_FLOOR}, model_error=error, prior=prior)
 
 
 def test_chi2(residual, sigma, fitted, log_s, rows, force_control: bool, levels=None) -> float:

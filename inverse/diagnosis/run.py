@@ -48,7 +48,7 @@ from inverse.diagnosis.params import physical_parameters
 from inverse.diagnosis.report import assemble
 from inverse.diagnosis.separability import separability
 from inverse.diagnosis.text import chi_at_bound, own_contradictions
-from inverse.judge import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, at_bound,
+from inverse.judge import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, at_bound, prior_for,
                            effective_dof, select)
 
 __all__ = ["CAUSES", "ALL_CAUSES", "T_CAUSE", "W_AMBIGUOUS", "observations_from",
@@ -175,7 +175,8 @@ def level_means_and_noise(obs, d, stds, raw):
     command states contradictions against. Arguments: :func:`observations_from`'s.
 
     Returns (noise model, level means, :class:`inverse.contradictions.NoiseLevels`)."""
-    noise = one_mode_noise(obs, stds, raw, d.run_order, _at_peak(d))
+    noise = one_mode_noise(obs, stds, raw, d.run_order, _at_peak(d),
+                           prior_for(d.rig_repeatability))
     obs.sigma = noise.total
     dm, _ = mean_per_level(d)
     first = np.r_[0, np.flatnonzero(np.diff(obs.levels)) + 1]

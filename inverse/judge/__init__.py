@@ -29,6 +29,11 @@ e.g. the log response amplitude, the same way on an absolute scale):
   :data:`~inverse.judge.noise.SCATTER_P` quantile of chi-square(nu); else 0 (an estimate
   on a few dof exceeds a correct identification noise in half the series by chance,
   and would trade known noise for one on those few dof).
+* **assumed** -- a rig repeats a level to about 0.05 % in frequency and 3 % in damping
+  (:data:`RIG_REPEATABILITY`, or what the user states): a prior of 2 dof pooled with
+  the estimate (Smyth 2004's moderated variance, :mod:`inverse.judge.prior`) where the
+  scatter does not contradict it (two-sided chi-square at 5 %); its dof add to the
+  estimate's. The words say whether it was used.
 * **total** ``= sqrt(identification^2 + repeatability^2)``, floored at
   :data:`FLOORS` (the digits a table prints). ``dof`` is ``inf`` when the repeatability
   part is 0 (the identification's stds are taken as known), else the estimate's.
@@ -73,6 +78,7 @@ from inverse.judge.bounds import Bounded, at_bound
 from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
                                  pooled_repeats, smooth_scatter)
 from inverse.judge.power import detection_bound, naming_power
+from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, prior_for
 from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
                                      Selection, drop_dof, drop_for_known_noise,
                                      effective_dof,
@@ -83,4 +89,4 @@ __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS"
            "fit_test", "effective_dof", "drop_dof", "known_noise_equivalent",
            "drop_for_known_noise",
            "Candidate", "Selection", "select", "Bounded", "at_bound", "detection_bound",
-           "naming_power"]
+           "naming_power", "RIG_REPEATABILITY", "RepeatabilityPrior", "prior_for"]

@@ -9,6 +9,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
+from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, moderated
+
 __all__ = ["MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
            "pooled_repeats"]
 
@@ -37,6 +39,7 @@ class NoiseModel:
     dof: dict
     kind: dict = field(default_factory=dict)
     floor: dict = field(default_factory=dict)
+    assumed: dict = field(default_factory=dict)
 
     @property
     def channels(self) -> list:
@@ -68,7 +71,8 @@ class NoiseModel:
                       "repeatability_rel": rel(self.repeatability[c]),
                       "total_rel": rel(self.total[c]),
                       "relative": c in _RELATIVE,
-                      "dof": None if math.isinf(self.dof[c]) else float(self.dof[c])}
+                      "dof": None if math.isinf(self.dof[c]) else float(self.dof[c]),
+                      "assumed_repeatability": self.assumed.get(c)}
         return out
 
 
@@ -202,7 +206,8 @@ def _plural(n, word):
 
 
 def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
-                floors: dict | None = None, model_error: dict | None = None) -> NoiseModel:
+                floors: dict | None = None, model_error: dict | None = None,
+                prior: RepeatabilityPrior | None = RIG_REPEATABILITY) -> NoiseModel:
     """Identification uncertainty plus the test's repeatability (module doc).
 
     Parameters
@@ -217,12 +222,14 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         or a drift with it is not taken as repeatability (:func:`smooth_scatter`)
     floors : overrides of :data:`FLOORS`; model_error : {channel: (n,)} added in
         quadrature to an estimated (not identification) part.
+    prior : the assumed repeatability pooled with the estimate where the data do not
+        contradict it (:mod:`inverse.judge.prior`); None: the data's estimate alone.
     """
     floors = {**FLOORS, **(floors or {})}
     model_error = model_error or {}
     level_ids = np.asarray(level_ids)
     x = np.log(np.asarray(abscissa, float))
-    ident, rep, total, source, dof, kind, floor = {}, {}, {}, {}, {}, {}, {}
+    ident, rep, total, source, dof, kind, floor, assumed = {}, {}, {}, {}, {}, {}, {}, {}
     labels = np.unique(level_ids)
     tm = None
     if run_order is not None:
@@ -267,7 +274,25 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
             words, kd = curve_words, "smooth"
         id_rel2 = float(np.mean((idn / scale) ** 2))
         r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
-        if r_rel and id_rel2 > 0 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P:
+        pooled, conflict = False, ""
+        if prior is not None and prior.rel_sd.get(c):
+            r0 = prior.rel_sd[c]
+            rep2, nu_post, p = moderated(s2 if nu else 0.0, nu, id_rel2, r0, prior.dof)
+            assumed[c] = {"rel_sd": r0, "dof": prior.dof, "used": rep2 is not None,
+                          "conflict_p": p, "kind": prior.kind}
+            if rep2 is not None:
+                r_rel, nu, pooled = math.sqrt(rep2), nu_post, True
+                kd = f"{kd}+{prior.kind}" if p is not None else prior.kind
+                words = (f"{words} pooled with {prior.words(c)}" if p is not None
+                         else f"{prior.words(c)} (too few levels for a scatter)")
+            else:
+                ratio = math.sqrt(s2 / (r0**2 + id_rel2))
+                how = (f"{ratio:.3g} times above" if ratio > 1
+                       else f"{1 / ratio:.3g} times below")
+                conflict = (f"; the scatter is {how} {prior.words(c)}, not pooled "
+                            f"(p = {p:.2g})")
+        if (not pooled and r_rel and id_rel2 > 0
+                and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P):
             r_rel = 0.0
             words += (f" exceeds it by {math.sqrt(s2 / id_rel2):.2f} times, within chance: "
                       f"p = {chi2_dist.sf(nu * s2 / id_rel2, nu):.2g}")
@@ -284,5 +309,5 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         fl = floors.get(c, _DEFAULT_FLOOR) * (float(np.median(np.abs(y))) if rel else 1.0)
         ident[c], rep[c], floor[c] = idn, r, fl
         total[c] = np.maximum(np.sqrt(idn**2 + r**2), fl)
-        source[c], dof[c], kind[c] = words, float(nu), kd
-    return NoiseModel(ident, rep, total, source, dof, kind, floor)
+        source[c], dof[c], kind[c] = words + conflict, float(nu), kd
+    return NoiseModel(ident, rep, total, source, dof, kind, floor, assumed)
