@@ -127,3 +127,25 @@ def test_cli_states_the_rig_or_assumes_nothing(tmp_path, capsys):
     assert main(["diagnose", str(path), "--rig-repeatability", "0.05"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--rig-repeatability 0.05" in err[0]
+
+
+def test_update_takes_the_stated_rig_to_the_fe_level_noise():
+    """``update --rig-repeatability`` reaches the FE level's noise
+    (:func:`cases.fe_loop.select.fe_noise`) through the update settings."""
+    from pathlib import Path
+
+    from cases.fe_loop.select import fe_noise
+    from cases.fe_loop.update import UpdateSettings, load_levels
+    from cli.main import build_parser
+    from cli.rig_options import rig_from_args
+
+    table = str(Path(__file__).resolve().parents[1] / "cases" / "data" /
+                "double_beam_measured.csv")
+    args = build_parser().parse_args(["update", "--case", "double-beam",
+                                      "--rig-repeatability", "0.001", "0.05"])
+    stated = rig_from_args(args)
+    assert stated == (1e-5, 5e-4, RIG_REPEATABILITY.dof)
+    data, _ = load_levels(UpdateSettings(data_path=table, rig_repeatability=stated))
+    jn, _ = fe_noise(data)
+    assert "the stated rig repeatability (0.001 % in frequency, 2 dof)" in jn.source["omega2"]
+    assert jn.assumed["zeta"]["kind"] == "stated"

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, moderated
+from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, pool
 
 __all__ = ["MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
            "pooled_repeats"]
@@ -29,8 +29,12 @@ _RELATIVE = ("omega2", "zeta")
 class NoiseModel:
     """Noise per channel and row: ``identification``, ``repeatability``, ``total`` (each
     ``{channel: (n,)}`` in the channel's units), ``source`` (words per channel), ``dof``
-    (per channel, ``math.inf`` when known) and ``kind`` (``repeats``, ``smooth``,
-    ``repeats+smooth`` or ``identification``)."""
+    (per channel, ``math.inf`` when known), ``kind`` (``repeats``, ``smooth``,
+    ``repeats+smooth`` or ``identification``; ``+assumed`` / ``+stated`` when the rig's
+    repeatability was pooled in, ``assumed`` / ``stated`` alone without a scatter) and
+    ``assumed`` (per channel with a prior: its ``rel_sd``, ``dof``, whether it was
+    ``used``, the conflict check's ``conflict_p`` and ``kind``;
+    :mod:`inverse.judge.prior`)."""
 
     identification: dict
     repeatability: dict
@@ -276,21 +280,14 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
         pooled, conflict = False, ""
         if prior is not None and prior.rel_sd.get(c):
-            r0 = prior.rel_sd[c]
-            rep2, nu_post, p = moderated(s2 if nu else 0.0, nu, id_rel2, r0, prior.dof)
-            assumed[c] = {"rel_sd": r0, "dof": prior.dof, "used": rep2 is not None,
-                          "conflict_p": p, "kind": prior.kind}
-            if rep2 is not None:
-                r_rel, nu, pooled = math.sqrt(rep2), nu_post, True
-                kd = f"{kd}+{prior.kind}" if p is not None else prior.kind
-                words = (f"{words} pooled with {prior.words(c)}" if p is not None
-                         else f"{prior.words(c)} (too few levels for a scatter)")
+            rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2)
+            if rep2 is None:
+                conflict = said
             else:
-                ratio = math.sqrt(s2 / (r0**2 + id_rel2))
-                how = (f"{ratio:.3g} times above" if ratio > 1
-                       else f"{1 / ratio:.3g} times below")
-                conflict = (f"; the scatter is {how} {prior.words(c)}, not pooled "
-                            f"(p = {p:.2g})")
+                r_rel, pooled = math.sqrt(rep2), True
+                kd, words = ((f"{kd}+{prior.kind}", f"{words} {said}") if nu
+                             else (prior.kind, said))
+                nu = nu_post
         if (not pooled and r_rel and id_rel2 > 0
                 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P):
             r_rel = 0.0

@@ -27,7 +27,8 @@ from dataclasses import dataclass, field
 
 from scipy.stats import chi2 as chi2_dist
 
-__all__ = ["RepeatabilityPrior", "RIG_REPEATABILITY", "CONFLICT_P", "moderated", "prior_for"]
+__all__ = ["RepeatabilityPrior", "RIG_REPEATABILITY", "CONFLICT_P", "moderated", "pool",
+           "prior_for"]
 
 #: Two-sided level of the prior-data conflict check (module doc).
 CONFLICT_P = 0.05
@@ -94,3 +95,22 @@ def moderated(s2: float, nu: float, ident2: float, r0: float, nu0: float):
         return None, float(nu), p
     rep_hat2 = max(0.0, s2 - ident2)
     return (nu0 * r0**2 + nu * rep_hat2) / (nu0 + nu), float(nu0 + nu), p
+
+
+def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: float):
+    """:func:`moderated` for one channel of :func:`inverse.judge.noise_model`, with its
+    record and words: (rep2 or None, dof, ``{rel_sd, dof, used, conflict_p, kind}``,
+    words: "pooled with ..." when used, "; the scatter is N times above/below ..., not
+    pooled (p = ...)" when the data contradict it)."""
+    r0 = prior.rel_sd[channel]
+    rep2, dof, p = moderated(s2, nu, ident2, r0, prior.dof)
+    record = {"rel_sd": r0, "dof": prior.dof, "used": rep2 is not None, "conflict_p": p,
+              "kind": prior.kind}
+    if rep2 is not None:
+        said = (f"pooled with {prior.words(channel)}" if p is not None
+                else f"{prior.words(channel)} (too few levels for a scatter)")
+        return rep2, dof, record, said
+    ratio = (s2 / (r0**2 + ident2)) ** 0.5
+    how = f"{ratio:.3g} times above" if ratio > 1 else f"{1 / ratio:.3g} times below"
+    said = f"; the scatter is {how} {prior.words(channel)}, not pooled (p = {p:.2g})"
+    return None, dof, record, said
