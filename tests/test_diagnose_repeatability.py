@@ -172,3 +172,25 @@ def test_rows_identified_at_their_peak_carry_no_response_distortion():
     assert np.median(e) > 1.5 * np.median(r_refit)
     assert any("identified at their peak amplitude" in w
                for w in diagnose(refit)["data_warnings"])
+
+
+def test_the_lenient_test_adds_no_distortion_to_rows_identified_at_their_peak():
+    """``test_chi2`` (the check whether FRF distortion alone could explain a misfit)
+    shrinks each omega2/zeta residual of a force-controlled level by its distortion
+    error ``0.17 |d y / d ln s|``, and leaves rows identified at their peak as they are:
+    their chi2 is then the plain sum of squares."""
+    from inverse.diagnosis.noise import log_slope, test_chi2
+
+    rng = np.random.default_rng(8)
+    n = 8
+    levels, log_s = np.arange(n), np.linspace(-3.0, 0.0, n)
+    fitted = np.stack([4e6 * (1 - 0.002 * np.exp(log_s)), 0.01 * np.exp(0.3 * log_s)])
+    sigma = np.stack([np.full(n, 40.0), np.full(n, 2e-4)])
+    r = rng.standard_normal((2, n))
+    rows = np.ones((2, n), bool)
+    plain = float(np.sum(r**2))
+    assert test_chi2(r, sigma, fitted, log_s, rows, True, levels, np.ones(n, bool)) == plain
+    e = 0.17 * np.abs(np.stack([log_slope(levels, log_s, f) for f in fitted]))
+    want = float(np.sum((r * sigma) ** 2 / (sigma**2 + e**2)))
+    assert test_chi2(r, sigma, fitted, log_s, rows, True, levels) == pytest.approx(want)
+    assert want < plain

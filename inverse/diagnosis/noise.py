@@ -69,15 +69,20 @@ def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None,
                        floors={"response": RESPONSE_FLOOR}, model_error=error, prior=prior)
 
 
-def test_chi2(residual, sigma, fitted, log_s, rows, force_control: bool, levels=None) -> float:
+def test_chi2(residual, sigma, fitted, log_s, rows, force_control: bool, levels=None,
+              at_peak=None) -> float:
     """``chi2`` of a fit with the identification model error of a force-controlled
     test added: standardized residuals ``residual`` (channels, n) of noise ``sigma``
     (channels, n), model error ``0.17 |d fitted / d ln s|`` of omega2 and zeta (module
-    doc); ``rows`` (channels, n) the levels in the fit."""
+    doc); ``rows`` (channels, n) the levels in the fit. ``at_peak`` (n,) bool: rows
+    identified at their peak amplitude (``--amplitude-refit``), which carry no such
+    error (as in :func:`one_mode_noise`)."""
     r = np.asarray(residual, float).copy()
     levels = np.arange(r.shape[1]) if levels is None else levels
     if force_control and len(np.unique(levels)) > 1:
         for i in (0, 1):
             e = 0.17 * np.abs(log_slope(levels, np.asarray(log_s), fitted[i]))
+            if at_peak is not None:
+                e = np.where(at_peak, 0.0, e)
             r[i] = r[i] * sigma[i] / np.sqrt(sigma[i] ** 2 + e**2)
     return float(np.sum(r[rows] ** 2))

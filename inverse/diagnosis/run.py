@@ -259,7 +259,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         fitted = np.stack([obs.omega2, obs.zeta]) - res[:2] * sig[:2]
         lenient = select([Candidate(f.model.causes, f.n_params, test_chi2(
             res, sig, fitted, np.log(obs.s), np.broadcast_to(f.train, (nc, n)),
-            not obs.response_controlled, obs.levels), f.n_data, gain=2.0)], noise)
+            not obs.response_controlled, obs.levels, peak), f.n_data, gain=2.0)], noise)
         p = lenient.tests[best].p_value
         if not obs.response_controlled and p is not None and p >= P_UNEXPLAINED:
             warnings.append(
