@@ -149,3 +149,22 @@ def test_update_takes_the_stated_rig_to_the_fe_level_noise():
     jn, _ = fe_noise(data)
     assert "the stated rig repeatability (0.001 % in frequency, 2 dof)" in jn.source["omega2"]
     assert jn.assumed["zeta"]["kind"] == "stated"
+
+
+def test_a_scatter_within_the_identifications_noise_keeps_it_known():
+    """With std columns whose noise is the whole scatter (no repeatability planted, the
+    identification's zeta noise 2 %, close to the prior's 3 %), the noise stays the
+    identification's, known (infinite dof), in about 1 - SCATTER_P of the series: the
+    rig's repeatability is pooled only where the scatter shows one (session 11's rule)."""
+    from inverse.judge.noise import SCATTER_P
+
+    rng = np.random.default_rng(23)
+    known, used = [], []
+    for _ in range(200):
+        x, clean = _trend(rng)
+        z = 0.01 * np.exp(0.3 * x + 0.02 * rng.standard_normal(x.size))
+        nm = noise_model(np.exp(x), {"zeta": z}, {"zeta": 0.02 * z}, np.arange(x.size))
+        known.append(nm.kind["zeta"] == "identification")
+        used.append(nm.assumed["zeta"]["used"])
+    assert abs(np.mean(known) - (1 - SCATTER_P)) < 0.06, np.mean(known)
+    assert np.mean(used) < 0.1

@@ -31,9 +31,10 @@ e.g. the log response amplitude, the same way on an absolute scale):
   and would trade known noise for one on those few dof).
 * **assumed** -- a rig repeats a level to about 0.05 % in frequency and 3 % in damping
   (:data:`RIG_REPEATABILITY`, or what the user states): a prior of 2 dof pooled with
-  the estimate (Smyth 2004's moderated variance, :mod:`inverse.judge.prior`) where the
-  scatter does not contradict it (two-sided chi-square at 5 %); its dof add to the
-  estimate's. The words say whether it was used.
+  the estimate (Smyth 2004's moderated variance, :mod:`inverse.judge.prior`) wherever a
+  repeatability is estimated (not where the scatter stays within a known
+  identification noise, above) and the scatter does not contradict it (two-sided
+  chi-square at 5 %); its dof add to the estimate's. The words say whether it was used.
 * **total** ``= sqrt(identification^2 + repeatability^2)``, floored at
   :data:`FLOORS` (the digits a table prints). ``dof`` is ``inf`` when the repeatability
   part is 0 (the identification's stds are taken as known), else the estimate's.

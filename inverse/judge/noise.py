@@ -279,7 +279,11 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         id_rel2 = float(np.mean((idn / scale) ** 2))
         r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
         pooled, conflict = False, ""
-        if prior is not None and prior.rel_sd.get(c):
+        within = bool(nu and id_rel2 > 0 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P)
+        if prior is not None and prior.rel_sd.get(c) and within:
+            assumed[c] = {"rel_sd": prior.rel_sd[c], "dof": prior.dof, "used": False,
+                          "conflict_p": None, "kind": prior.kind}
+        elif prior is not None and prior.rel_sd.get(c):
             rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2)
             if rep2 is None:
                 conflict = said
@@ -288,8 +292,7 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
                 kd, words = ((f"{kd}+{prior.kind}", f"{words} {said}") if nu
                              else (prior.kind, said))
                 nu = nu_post
-        if (not pooled and r_rel and id_rel2 > 0
-                and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P):
+        if not pooled and r_rel and within:
             r_rel = 0.0
             words += (f" exceeds it by {math.sqrt(s2 / id_rel2):.2f} times, within chance: "
                       f"p = {chi2_dist.sf(nu * s2 / id_rel2, nu):.2g}")

@@ -18,8 +18,12 @@ Student-t with ``nu0 + nu`` dof). ``nu0 = 2`` says "within a factor of about 2.5
 A prior the data contradict is not used (a prior-data conflict check, Evans &
 Moshonov 2006): the scatter ``s^2`` on ``nu`` dof against ``r0^2 + mean(ident^2)``,
 two-sided at :data:`CONFLICT_P`. A rig that repeats 10 times better, or worse, than
-assumed gets its own estimate; a synthetic series without repeatability, whose scatter
-is the identification's alone, too.
+assumed gets its own estimate. Where the identification's noise is known (std columns)
+and the scatter does not exceed it significantly (:data:`inverse.judge.noise.SCATTER_P`,
+session 11's rule), the noise stays the identification's, known: the data show no
+repeatability there, and pooling a prior of 3 % into an identified zeta noise of 1-2 %
+that 1-2 dof cannot tell apart from it lost more verdicts than it won (docs/judge.md,
+session 12).
 """
 from __future__ import annotations
 
