@@ -226,8 +226,9 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         or a drift with it is not taken as repeatability (:func:`smooth_scatter`)
     floors : overrides of :data:`FLOORS`; model_error : {channel: (n,)} added in
         quadrature to an estimated (not identification) part.
-    prior : the assumed repeatability pooled with the estimate where the data do not
-        contradict it (:mod:`inverse.judge.prior`); None: the data's estimate alone.
+    prior : the assumed repeatability, pooled with an estimated repeatability where the
+        scatter does not contradict it (not where the scatter stays within a known
+        identification noise; :mod:`inverse.judge.prior`); None: the data alone.
     """
     floors = {**FLOORS, **(floors or {})}
     model_error = model_error or {}
@@ -281,8 +282,7 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         pooled, conflict = False, ""
         within = bool(nu and id_rel2 > 0 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P)
         if prior is not None and prior.rel_sd.get(c) and within:
-            assumed[c] = {"rel_sd": prior.rel_sd[c], "dof": prior.dof, "used": False,
-                          "conflict_p": None, "kind": prior.kind}
+            assumed[c] = prior.record(c, used=False)        # no repeatability shown
         elif prior is not None and prior.rel_sd.get(c):
             rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2)
             if rep2 is None:

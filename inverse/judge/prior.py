@@ -56,6 +56,11 @@ class RepeatabilityPrior:
         article = "an" if self.kind == "assumed" else "the"
         return f"{article} {self.kind} rig repeatability ({what}, {self.dof:g} dof)"
 
+    def record(self, channel: str, used: bool, conflict_p=None) -> dict:
+        """What the noise model reports of it for one channel (JSON)."""
+        return {"rel_sd": self.rel_sd[channel], "dof": self.dof, "used": used,
+                "conflict_p": conflict_p, "kind": self.kind}
+
 
 #: A rig repeats a level to about 0.05 % in frequency (omega2: 0.1 %) and 3 % in
 #: damping (the brief; assumed).
@@ -108,8 +113,7 @@ def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: 
     pooled (p = ...)" when the data contradict it)."""
     r0 = prior.rel_sd[channel]
     rep2, dof, p = moderated(s2, nu, ident2, r0, prior.dof)
-    record = {"rel_sd": r0, "dof": prior.dof, "used": rep2 is not None, "conflict_p": p,
-              "kind": prior.kind}
+    record = prior.record(channel, rep2 is not None, p)
     if rep2 is not None:
         said = (f"pooled with {prior.words(channel)}" if p is not None
                 else f"{prior.words(channel)} (too few levels for a scatter)")
