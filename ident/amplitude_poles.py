@@ -195,7 +195,8 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
         if not np.any(theta):
             if not _significant(2 * _linear_fit(f, Hn, p0, pseudo, wt).cost, sol, m,
                                 2 * K * P - n_lin - n_theta):
-                return modes, None
+                return modes, ("the amplitude slopes did not lower the misfit significantly "
+                               f"(F test at {SLOPE_F_LEVEL:g}): linear fit kept")
         theta = sol.x
         allp = np.concatenate([lines, np.broadcast_to(pseudo, (K, pseudo.size))], axis=1)
         residues, fitted, _ = lsfd(f, Hn, allp, wt)

@@ -103,6 +103,12 @@ def test_a_linear_level_keeps_its_linear_fit():
         assert np.isnan(new.omega2_slope) and np.isnan(new.response_at_peak)
         assert abs(new.omega2 - law["w0"] ** 2) < 4 * new.omega2_std
         assert abs(new.zeta - law["z0"]) < 4 * new.zeta_std
+    rng = np.random.default_rng(7)                   # and the level says so
+    law = _backbone(rng, 0.0)
+    force = law["w0"] ** 2 * 2 * law["z0"] * law["a0"]
+    f, H, _ = _level(law, force, 60, 2e-3, rng)
+    notes = identify_level(_set(f, H, force), "receptance", n_modes=1, amplitude=True).notes
+    assert any("did not lower the misfit significantly" in n for n in notes), notes
 
 
 def test_response_control_is_not_refitted_and_the_table_takes_the_peak_amplitude():

@@ -179,8 +179,8 @@ def _print_levels(table):
               f"{x['x_mac'][i]:6.4f}")
     refit = np.isfinite(np.asarray(x.get("x_omega2_slope", []), float))
     if refit.any():
-        rest = ("" if refit.all() else "; the other levels keep the linear fit (the slopes "
-                "did not lower the misfit significantly, or a warning says why)")
+        rest = ("" if refit.all() else "; the other levels keep the linear fit (their "
+                "warnings say why)")
         print(f"  frequency, zeta and response at each level's peak amplitude (fitted with "
               f"their slopes across the band, --amplitude-refit) at levels "
               f"{', '.join(map(str, np.unique(table.level[refit])))}{rest}")
