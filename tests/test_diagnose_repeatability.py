@@ -8,6 +8,8 @@ identification noise 10-30x smaller that the table's std columns state.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -194,3 +196,30 @@ def test_the_lenient_test_adds_no_distortion_to_rows_identified_at_their_peak():
     want = float(np.sum((r * sigma) ** 2 / (sigma**2 + e**2)))
     assert test_chi2(r, sigma, fitted, log_s, rows, True, levels) == pytest.approx(want)
     assert want < plain
+
+
+def test_a_damping_drift_in_run_order_is_not_taken_for_the_rig_scatter():
+    """A damping that cycles by +-40-70 % (drawn; a full cycle, which no run-order term
+    of the noise model follows) through a shuffled run order, no repeats: the scatter about a smooth curve in amplitude is several times what a rig
+    repeats. Judged against the assumed rig repeatability (capped), the diagnosis does
+    not answer ``none`` (no cause of the catalogue drifts the damping with time); it
+    states what the verdict would be with the data's own scatter as the noise. The same
+    series without the drift is not capped."""
+    rng = np.random.default_rng(2024)
+    verdicts, capped_plain = [], []
+    for seed in range(5):
+        d = _series(300 + seed, s_f=2.5e-4, s_z=0.015)
+        order = rng.permutation(d.level.size) + 1
+        capped_plain.append(bool(diagnose(replace(d, run_order=order))
+                                 ["verdict_own_scatter"]))
+        t = (order - 1) / (order.size - 1)
+        size = rng.uniform(0.4, 0.7)
+        drifted = d.zeta * (1 + size * np.sin(2 * np.pi * t + rng.uniform(0, 2 * np.pi)))
+        r = diagnose(replace(d, run_order=order, zeta=drifted,
+                      zeta_std=d.zeta_std * drifted / d.zeta))
+        assert r["noise"]["zeta"]["assumed_repeatability"]["capped"], r["noise"]["zeta"]
+        assert r["verdict_own_scatter"] is not None
+        assert "with that scatter as the noise" in r["summary"]
+        verdicts.append(r["cause"])
+    assert verdicts.count("none") <= 1, verdicts
+    assert not any(capped_plain), capped_plain

@@ -51,13 +51,14 @@ def distortion(log_s, zeta, levels=None):
 
 
 def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None,
-                   prior=RIG_REPEATABILITY) -> NoiseModel:
+                   prior=RIG_REPEATABILITY, cap: bool = True) -> NoiseModel:
     """The judge's noise model of ``obs`` (:class:`inverse.diagnosis.models.Observations`)
     with the table's ``stds`` (``{channel: (n,) or None}``). ``at_peak`` (n,) bool: rows
     whose pole and response were identified at the level's peak amplitude
     (``iwanfe identify --amplitude-refit``, :mod:`ident.amplitude_poles`): no
     distortion error on their response. ``prior``: the assumed rig repeatability
-    (:mod:`inverse.judge.prior`; None: the data's estimate alone)."""
+    (:mod:`inverse.judge.prior`; None: the data's estimate alone); ``cap``: as in
+    :func:`inverse.judge.noise_model`."""
     values = {"omega2": obs.omega2, "zeta": obs.zeta}
     error = {}
     if obs.log_r is not None:
@@ -66,7 +67,8 @@ def one_mode_noise(obs, stds: dict, abscissa, run_order, at_peak=None,
         if at_peak is not None:
             error["response"] = np.where(at_peak, 0.0, error["response"])
     return noise_model(abscissa, values, stds, obs.levels, run_order,
-                       floors={"response": RESPONSE_FLOOR}, model_error=error, prior=prior)
+                       floors={"response": RESPONSE_FLOOR}, model_error=error, prior=prior,
+                       cap=cap)
 
 
 def test_chi2(residual, sigma, fitted, log_s, rows, force_control: bool, levels=None,

@@ -8,6 +8,8 @@ and what measurement separates them), ``contradictions`` (plain strings) and
 ``evidence`` (per candidate), ``fit_test`` (the named or closest model against the
 noise), ``noise`` (per channel: source, identification and repeatability parts, dof),
 ``verdict_identification_only`` (the verdict with the identification's noise alone),
+``verdict_own_scatter`` (where a scatter far above the assumed rig repeatability was
+judged against it: the verdict with that scatter as the noise; else None),
 ``closest_miss`` (when ``unexplained``), ``parameter_bounds`` (every fitted parameter of
 the named model with ``at_bound``), ``at_bound`` (names), ``held_out_predictions``,
 ``failures``, ``untestable``, ``separability``, ``data_warnings``, ``summary``,
@@ -114,7 +116,7 @@ def _failures(fits, cv, held, profile_failures):
 def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
              unavailable, untestable, contradictions, refuted, separability, warnings,
              predictions, selection_id_only, why_id_only, profiles,
-             profile_failures) -> dict:
+             profile_failures, selection_own_scatter=None) -> dict:
     """The diagnosis as one JSON-ready dict (module doc)."""
     sel = selection
     cause, also, best, rivals = sel.cause, sel.also, sel.best, sel.rivals
@@ -155,6 +157,8 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
                        contradictions, best, rivals, np.unique(obs.levels).size,
                        separability["inseparable"], unfit)
     summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
+    own = _verdict_json(selection_own_scatter)
+    summary += _own_scatter_sentence(noise.capped(), own, (cause, also))
     summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
                                   n_top)
     if on_bound:
@@ -196,6 +200,7 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
         "verdict_identification_only": id_only,
         "verdict_changes_with_identification_only": changes,
         "identification_only_note": why_id_only,
+        "verdict_own_scatter": own,
         "failures": _failures(fits, cv, held, profile_failures),
         "untestable": untestable,
         "separability": separability,
@@ -211,6 +216,19 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
             "base_cv_residual": cv["none"][1], "extended_cv_residual": cv[best][1],
             "channels": obs.channels},
     }
+
+
+def _own_scatter_sentence(capped, own, verdict) -> str:
+    """What the verdict would be with the data's own scatter where it was capped."""
+    if not capped or own is None:
+        return ""
+    text = (f" The scatter of {' and '.join(capped)} is far above what a rig repeats and "
+            f"was judged against the assumed repeatability: ")
+    if (own["cause"], own["also"]) == tuple(verdict):
+        return text + "with that scatter as the noise the verdict is the same."
+    name = own["cause"] + (f" + {', '.join(own['also'])}" if own["also"] else "")
+    return text + (f"with that scatter as the noise the verdict would be {name}; a "
+                   f"repeated level tells which holds.")
 
 
 def _noise_sentence(noise_json, id_only, changes, why) -> str:

@@ -27,7 +27,9 @@ and is excluded. No eligible candidate: ``unexplained``, with the closest miss.
 
 The verdict is also taken with the identification's noise alone
 (``verdict_identification_only``, refitting every candidate), so the report says
-whether it follows from the repeatability.
+whether it follows from the repeatability; and, where a channel's scatter far above the
+assumed rig repeatability was judged against it (:mod:`inverse.judge.prior`), with
+that scatter as the noise (``verdict_own_scatter``).
 """
 from __future__ import annotations
 
@@ -168,15 +170,16 @@ def _at_peak(d):
     return np.array([finite(v) for v in col])
 
 
-def level_means_and_noise(obs, d, stds, raw):
+def level_means_and_noise(obs, d, stds, raw, cap: bool = True):
     """The judge's noise model of one mode (identification plus repeatability,
     :func:`inverse.diagnosis.noise.one_mode_noise`; sets ``obs.sigma``), the level means
     and the noise of each mean (over the square root of the level's runs): what every
-    command states contradictions against. Arguments: :func:`observations_from`'s.
+    command states contradictions against. Arguments: :func:`observations_from`'s;
+    ``cap`` as in :func:`inverse.judge.noise_model`.
 
     Returns (noise model, level means, :class:`inverse.contradictions.NoiseLevels`)."""
     noise = one_mode_noise(obs, stds, raw, d.run_order, _at_peak(d),
-                           prior_for(d.rig_repeatability))
+                           prior_for(d.rig_repeatability), cap=cap)
     obs.sigma = noise.total
     dm, _ = mean_per_level(d)
     first = np.r_[0, np.flatnonzero(np.diff(obs.levels)) + 1]
@@ -211,6 +214,26 @@ def _identification_only(models, obs, noise, cv, refuted):
     finally:
         obs.sigma = sig
     return sel, None
+
+
+def _own_scatter(models, obs, d, stds, raw, noise):
+    """The verdict with the data's own scatter as the noise where a channel's was judged
+    against the assumed rig repeatability (:meth:`inverse.judge.NoiseModel.capped`;
+    every candidate, fold and contradiction again), or None when none was."""
+    if not noise.capped():
+        return None
+    sig = obs.sigma
+    try:
+        own, dm, mean_noise = level_means_and_noise(obs, d, stds, raw, cap=False)
+        fits = _fit_all(models, obs)
+        base_zeta = obs.zeta - fits["none"].residual[obs.n:2 * obs.n] * obs.sigma["zeta"]
+        found = _contradictions(dm, mean_noise, obs, base_zeta,
+                                physical_parameters(fits["none"], obs))
+        cv = {k: leave_one_out(f, obs) for k, f in fits.items()}
+        refuted = any(c.kind in _REFUTING for c in found)
+        return select(_candidates(fits, cv, obs, refuted), own)
+    finally:
+        obs.sigma = sig
 
 
 def _profiles(fit, obs, dof):
@@ -270,6 +293,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     if best != "none" and chi_at_bound(params[best], best) is not None:
         found.append(chi_at_bound(params[best], best))
     sel_id, why_id = _identification_only(models, obs, noise, cv, refuted)
+    sel_own = _own_scatter(models, obs, d, stds, raw, noise)
     averaged = averaging_weights(sel)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
     predictions = model_averaged(       # unexplained: widened by the closest's misfit
@@ -290,6 +314,6 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         unavailable=unavailable, untestable=untestable, contradictions=found,
         refuted=refuted, separability=sep, warnings=warnings, predictions=predictions,
         selection_id_only=sel_id, why_id_only=why_id, profiles=profiles,
-        profile_failures=profile_failures)
+        profile_failures=profile_failures, selection_own_scatter=sel_own)
     report["test"] = str(d.test[0])
     return report

@@ -31,9 +31,10 @@ class NoiseModel:
     ``{channel: (n,)}`` in the channel's units), ``source`` (words per channel), ``dof``
     (per channel, ``math.inf`` when known), ``kind`` (``repeats``, ``smooth``,
     ``repeats+smooth`` or ``identification``; ``+assumed`` / ``+stated`` when the rig's
-    repeatability was pooled in, ``assumed`` / ``stated`` alone without a scatter) and
+    repeatability was pooled in, ``+assumed+capped`` when a scatter far above it was
+    judged against it, ``assumed`` / ``stated`` alone without a scatter) and
     ``assumed`` (per channel with a prior: its ``rel_sd``, ``dof``, whether it was
-    ``used``, the conflict check's ``conflict_p`` and ``kind``;
+    ``used``, the conflict check's ``conflict_p``, ``capped`` and ``kind``;
     :mod:`inverse.judge.prior`)."""
 
     identification: dict
@@ -58,6 +59,11 @@ class NoiseModel:
                        source={c: "identification only" for c in self.total},
                        dof={c: math.inf for c in self.total},
                        kind={c: "identification" for c in self.total})
+
+    def capped(self) -> list:
+        """The channels whose scatter was judged against the assumed repeatability
+        (:func:`inverse.judge.prior.pool`)."""
+        return [c for c, a in self.assumed.items() if a and a.get("capped")]
 
     def has_identification(self) -> bool:
         """Whether any channel has an identification part."""
@@ -211,7 +217,8 @@ def _plural(n, word):
 
 def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
                 floors: dict | None = None, model_error: dict | None = None,
-                prior: RepeatabilityPrior | None = RIG_REPEATABILITY) -> NoiseModel:
+                prior: RepeatabilityPrior | None = RIG_REPEATABILITY,
+                cap: bool = True) -> NoiseModel:
     """Identification uncertainty plus the test's repeatability (module doc).
 
     Parameters
@@ -229,6 +236,8 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
     prior : the assumed repeatability, pooled with an estimated repeatability where the
         scatter does not contradict it (not where the scatter stays within a known
         identification noise; :mod:`inverse.judge.prior`); None: the data alone.
+    cap : a scatter far above the prior, without repeats of its own, is judged against
+        the prior (:func:`inverse.judge.prior.pool`); False: it stays the noise.
     """
     floors = {**FLOORS, **(floors or {})}
     model_error = model_error or {}
@@ -284,12 +293,15 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         if prior is not None and prior.rel_sd.get(c) and within:
             assumed[c] = prior.record(c, used=False)        # no repeatability shown
         elif prior is not None and prior.rel_sd.get(c):
-            rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2)
+            rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2,
+                                                   repeats_alone=kd == "repeats" or not cap)
             if rep2 is None:
                 conflict = said
             else:
                 r_rel, pooled = math.sqrt(rep2), True
-                kd, words = ((f"{kd}+{prior.kind}", f"{words} {said}") if nu
+                capped = assumed[c]["capped"]
+                kd, words = ((f"{kd}+{prior.kind}" + ("+capped" if capped else ""),
+                              f"{words}{said}" if capped else f"{words} {said}") if nu
                              else (prior.kind, said))
                 nu = nu_post
         if not pooled and r_rel and within:

@@ -24,18 +24,36 @@ session 11's rule), the noise stays the identification's, known: the data show n
 repeatability there, and pooling a prior of 3 % into an identified zeta noise of 1-2 %
 that 1-2 dof cannot tell apart from it lost more verdicts than it won (docs/judge.md,
 session 12).
+
+A scatter far *above* what a rig repeats, with no repeats of its own to measure the
+repeatability (fewer than :data:`inverse.judge.noise.MIN_REPEAT_DOF` dof), is not
+taken as noise: a level scattering about a smooth curve by several times a rig's
+repeatability is more likely an effect the smooth curve does not follow (a drift in
+run order, a bend) than the rig. "About 0.05 %" is read as within a factor
+:data:`CAP_FACTOR` = 2: the scatter is tested one-sided against ``(2 r0)^2 +
+mean(ident^2)`` at :data:`EXCESS_P`, and where it exceeds it the data are judged
+against ``(2 r0)^2``, as known (``capped``): the largest repeatability of a typical
+rig, so that a verdict holds against any of them. The words say so and how to state a
+rig that repeats that poorly (``--rig-repeatability``). Repeats of their own keep
+their estimate, however large.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from scipy.stats import chi2 as chi2_dist
 
-__all__ = ["RepeatabilityPrior", "RIG_REPEATABILITY", "CONFLICT_P", "moderated", "pool",
-           "prior_for"]
+__all__ = ["RepeatabilityPrior", "RIG_REPEATABILITY", "CONFLICT_P", "EXCESS_P", "CAP_FACTOR",
+           "moderated", "pool", "prior_for"]
 
 #: Two-sided level of the prior-data conflict check (module doc).
 CONFLICT_P = 0.05
+#: One-sided level above which a scatter without repeats is judged against the prior
+#: (module doc): the fit test's level, :data:`inverse.judge.selection.P_UNEXPLAINED`.
+EXCESS_P = 1e-3
+#: "About" the assumed repeatability: within this factor (module doc).
+CAP_FACTOR = 2.0
 
 
 @dataclass(frozen=True)
@@ -56,10 +74,10 @@ class RepeatabilityPrior:
         article = "an" if self.kind == "assumed" else "the"
         return f"{article} {self.kind} rig repeatability ({what}, {self.dof:g} dof)"
 
-    def record(self, channel: str, used: bool, conflict_p=None) -> dict:
+    def record(self, channel: str, used: bool, conflict_p=None, capped=False) -> dict:
         """What the noise model reports of it for one channel (JSON)."""
         return {"rel_sd": self.rel_sd[channel], "dof": self.dof, "used": used,
-                "conflict_p": conflict_p, "kind": self.kind}
+                "conflict_p": conflict_p, "capped": capped, "kind": self.kind}
 
 
 #: A rig repeats a level to about 0.05 % in frequency (omega2: 0.1 %) and 3 % in
@@ -106,19 +124,35 @@ def moderated(s2: float, nu: float, ident2: float, r0: float, nu0: float):
     return (nu0 * r0**2 + nu * rep_hat2) / (nu0 + nu), float(nu0 + nu), p
 
 
-def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: float):
+def excess_p(s2: float, nu: float, ident2: float, r0: float) -> float:
+    """One-sided p of a scatter ``s2`` on ``nu`` dof as large as it is, were the noise
+    the identification's and a repeatability ``r0``."""
+    return float(chi2_dist.sf(nu * s2 / (r0**2 + ident2), nu)) if nu > 0 else 1.0
+
+
+def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: float,
+         repeats_alone: bool = False):
     """:func:`moderated` for one channel of :func:`inverse.judge.noise_model`, with its
-    record and words: (rep2 or None, dof, ``{rel_sd, dof, used, conflict_p, kind}``,
-    words: "pooled with ..." when used, "; the scatter is N times above/below ..., not
-    pooled (p = ...)" when the data contradict it)."""
+    record and words: (rep2 or None, dof, ``{rel_sd, dof, used, conflict_p, capped,
+    kind}``, words: "pooled with ..." when used, "; the scatter is N times above/below
+    ..., not pooled (p = ...)" when the data contradict it). A scatter far above
+    :data:`CAP_FACTOR` times the prior that is not the repeats' alone
+    (``repeats_alone``) gives that variance on infinite dof (``capped``, module doc)."""
     r0 = prior.rel_sd[channel]
     rep2, dof, p = moderated(s2, nu, ident2, r0, prior.dof)
-    record = prior.record(channel, rep2 is not None, p)
     if rep2 is not None:
         said = (f"pooled with {prior.words(channel)}" if p is not None
                 else f"{prior.words(channel)} (too few levels for a scatter)")
-        return rep2, dof, record, said
+        return rep2, dof, prior.record(channel, True, p), said
     ratio = (s2 / (r0**2 + ident2)) ** 0.5
     how = f"{ratio:.3g} times above" if ratio > 1 else f"{1 / ratio:.3g} times below"
+    r_hi = CAP_FACTOR * r0
+    above = excess_p(s2, nu, ident2, r_hi)
+    if above < EXCESS_P and not repeats_alone:
+        said = (f"; the scatter is {how} {prior.words(channel)}, above {CAP_FACTOR:g} times "
+                f"it at p = {above:.2g}: more than a rig repeats, so judged against "
+                f"{CAP_FACTOR:g} times that repeatability as known (a rig that repeats so "
+                f"poorly: state it with --rig-repeatability)")
+        return r_hi**2, math.inf, prior.record(channel, True, p, capped=True), said
     said = f"; the scatter is {how} {prior.words(channel)}, not pooled (p = {p:.2g})"
-    return None, dof, record, said
+    return None, dof, prior.record(channel, False, p), said
