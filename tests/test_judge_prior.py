@@ -105,7 +105,7 @@ def test_a_scatter_far_above_the_rig_is_judged_against_it_unless_repeats_measure
     assert "judged against 2 times that repeatability as known" in said
     assert "--rig-repeatability" in said
     rep2, dof, rec, said = pool(RIG_REPEATABILITY, "zeta", 25 * r0**2, 8, 0.0,
-                                repeats_alone=True)
+                                may_cap=False)
     assert rep2 is None and dof == 8 and not rec["capped"] and "not pooled" in said
     edge = chi2.isf(EXCESS_P, 8) / 8 * (CAP_FACTOR * r0) ** 2
     assert pool(RIG_REPEATABILITY, "zeta", 0.98 * edge, 8, 0.0)[0] is None

@@ -294,7 +294,7 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
             assumed[c] = prior.record(c, used=False)        # no repeatability shown
         elif prior is not None and prior.rel_sd.get(c):
             rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2,
-                                                   repeats_alone=kd == "repeats" or not cap)
+                                                   may_cap=cap and kd != "repeats")
             if rep2 is None:
                 conflict = said
             else:

@@ -131,13 +131,13 @@ def excess_p(s2: float, nu: float, ident2: float, r0: float) -> float:
 
 
 def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: float,
-         repeats_alone: bool = False):
+         may_cap: bool = True):
     """:func:`moderated` for one channel of :func:`inverse.judge.noise_model`, with its
     record and words: (rep2 or None, dof, ``{rel_sd, dof, used, conflict_p, capped,
     kind}``, words: "pooled with ..." when used, "; the scatter is N times above/below
-    ..., not pooled (p = ...)" when the data contradict it). A scatter far above
-    :data:`CAP_FACTOR` times the prior that is not the repeats' alone
-    (``repeats_alone``) gives that variance on infinite dof (``capped``, module doc)."""
+    ..., not pooled (p = ...)" when the data contradict it). Where ``may_cap`` (the
+    scatter is not the repeats' alone), a scatter far above :data:`CAP_FACTOR` times
+    the prior gives that variance on infinite dof (``capped``, module doc)."""
     r0 = prior.rel_sd[channel]
     rep2, dof, p = moderated(s2, nu, ident2, r0, prior.dof)
     if rep2 is not None:
@@ -148,7 +148,7 @@ def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: 
     how = f"{ratio:.3g} times above" if ratio > 1 else f"{1 / ratio:.3g} times below"
     r_hi = CAP_FACTOR * r0
     above = excess_p(s2, nu, ident2, r_hi)
-    if above < EXCESS_P and not repeats_alone:
+    if above < EXCESS_P and may_cap:
         said = (f"; the scatter is {how} {prior.words(channel)}, above {CAP_FACTOR:g} times "
                 f"it at p = {above:.2g}: more than a rig repeats, so judged against "
                 f"{CAP_FACTOR:g} times that repeatability as known (a rig that repeats so "
