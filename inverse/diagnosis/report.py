@@ -22,6 +22,7 @@ import numpy as np
 from inverse.diagnosis.separability import separating_measurement
 from inverse.diagnosis.text import describe, extrapolation_note
 from inverse.judge import P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Bounded, at_bound
+from inverse.judge.prior import CAP_FACTOR
 
 __all__ = ["assemble", "ERROR_MEASURE"]
 
@@ -223,7 +224,7 @@ def _own_scatter_sentence(capped, own, verdict) -> str:
     if not capped or own is None:
         return ""
     text = (f" The scatter of {' and '.join(capped)} is far above what a rig repeats and "
-            f"was judged against the assumed repeatability: ")
+            f"was judged against {CAP_FACTOR:g} times the assumed repeatability: ")
     if (own["cause"], own["also"]) == tuple(verdict):
         return text + "with that scatter as the noise the verdict is the same."
     name = own["cause"] + (f" + {', '.join(own['also'])}" if own["also"] else "")
