@@ -199,6 +199,19 @@ def _contradictions(dm, levels, obs, base_zeta, base_params):
             + own_contradictions(dm, base_params, zm, levels))
 
 
+def _judged(models, obs, noise, dm, mean_noise):
+    """Every candidate fitted against ``obs.sigma`` and cross-validated, the
+    contradictions on the base fit, and the rule's selection against ``noise``:
+    (fits, physical parameters, contradictions, refuted, cv, selection)."""
+    fits = _fit_all(models, obs)
+    params = {k: physical_parameters(f, obs) for k, f in fits.items()}
+    base_zeta = obs.zeta - fits["none"].residual[obs.n:2 * obs.n] * obs.sigma["zeta"]
+    found = _contradictions(dm, mean_noise, obs, base_zeta, params["none"])
+    refuted = any(c.kind in _REFUTING for c in found)
+    cv = {k: leave_one_out(f, obs) for k, f in fits.items()}
+    return fits, params, found, refuted, cv, select(_candidates(fits, cv, obs, refuted), noise)
+
+
 def _identification_only(models, obs, noise, cv, refuted):
     """The verdict with the identification's noise alone (refitted), or None with why."""
     if not noise.has_identification():
@@ -224,14 +237,7 @@ def _own_scatter(models, obs, d, stds, raw, noise):
         return None
     sig = obs.sigma
     try:
-        own, dm, mean_noise = level_means_and_noise(obs, d, stds, raw, cap=False)
-        fits = _fit_all(models, obs)
-        base_zeta = obs.zeta - fits["none"].residual[obs.n:2 * obs.n] * obs.sigma["zeta"]
-        found = _contradictions(dm, mean_noise, obs, base_zeta,
-                                physical_parameters(fits["none"], obs))
-        cv = {k: leave_one_out(f, obs) for k, f in fits.items()}
-        refuted = any(c.kind in _REFUTING for c in found)
-        return select(_candidates(fits, cv, obs, refuted), own)
+        return _judged(models, obs, *level_means_and_noise(obs, d, stds, raw, cap=False))[-1]
     finally:
         obs.sigma = sig
 
@@ -265,14 +271,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     models = [m for m in MODELS if not set(m.causes) & set(untestable)]
     unavailable = {m.name: "; ".join(untestable[c] for c in m.causes if c in untestable)
                    for m in MODELS if set(m.causes) & set(untestable)}
-    fits = _fit_all(models, obs)
-    base = fits["none"]
-    params = {k: physical_parameters(f, obs) for k, f in fits.items()}
-    base_zeta = obs.zeta - base.residual[obs.n:2 * obs.n] * obs.sigma["zeta"]
-    found = _contradictions(dm, mean_noise, obs, base_zeta, params["none"])
-    refuted = any(c.kind in _REFUTING for c in found)
-    cv = {k: leave_one_out(f, obs) for k, f in fits.items()}
-    sel = select(_candidates(fits, cv, obs, refuted), noise)
+    fits, params, found, refuted, cv, sel = _judged(models, obs, noise, dm, mean_noise)
     best = sel.best
     if sel.unexplained:
         f = fits[best]

@@ -299,10 +299,9 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
                 conflict = said
             else:
                 r_rel, pooled = math.sqrt(rep2), True
-                capped = assumed[c]["capped"]
-                kd, words = ((f"{kd}+{prior.kind}" + ("+capped" if capped else ""),
-                              f"{words}{said}" if capped else f"{words} {said}") if nu
-                             else (prior.kind, said))
+                tag = "+capped" if assumed[c]["capped"] else ""
+                kd, words = ((f"{kd}+{prior.kind}{tag}", words + said) if nu
+                             else (prior.kind, said.strip()))
                 nu = nu_post
         if not pooled and r_rel and within:
             r_rel = 0.0

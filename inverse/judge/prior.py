@@ -134,14 +134,15 @@ def pool(prior: RepeatabilityPrior, channel: str, s2: float, nu: float, ident2: 
          may_cap: bool = True):
     """:func:`moderated` for one channel of :func:`inverse.judge.noise_model`, with its
     record and words: (rep2 or None, dof, ``{rel_sd, dof, used, conflict_p, capped,
-    kind}``, words: "pooled with ..." when used, "; the scatter is N times above/below
-    ..., not pooled (p = ...)" when the data contradict it). Where ``may_cap`` (the
+    kind}``, words to append to the scatter's: " pooled with ..." when used, "; the
+    scatter is N times above/below ..., not pooled (p = ...)" when the data contradict
+    it; the prior's own words when there is no scatter). Where ``may_cap`` (the
     scatter is not the repeats' alone), a scatter far above :data:`CAP_FACTOR` times
     the prior gives that variance on infinite dof (``capped``, module doc)."""
     r0 = prior.rel_sd[channel]
     rep2, dof, p = moderated(s2, nu, ident2, r0, prior.dof)
     if rep2 is not None:
-        said = (f"pooled with {prior.words(channel)}" if p is not None
+        said = (f" pooled with {prior.words(channel)}" if p is not None
                 else f"{prior.words(channel)} (too few levels for a scatter)")
         return rep2, dof, prior.record(channel, True, p), said
     ratio = (s2 / (r0**2 + ident2)) ** 0.5
