@@ -219,6 +219,7 @@ def test_a_damping_drift_in_run_order_is_not_taken_for_the_rig_scatter():
                       zeta_std=d.zeta_std * drifted / d.zeta))
         assert r["noise"]["zeta"]["assumed_repeatability"]["capped"], r["noise"]["zeta"]
         assert r["verdict_own_scatter"] is not None
+        assert set(r["verdict_own_scatter"]["failures"]) == {"fits", "folds"}
         assert "with that scatter as the noise" in r["summary"]
         verdicts.append(r["cause"])
     assert verdicts.count("none") <= 1, verdicts

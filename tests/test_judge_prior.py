@@ -102,6 +102,7 @@ def test_a_scatter_far_above_the_rig_is_judged_against_it_unless_repeats_measure
     rep2, dof, rec, said = pool(RIG_REPEATABILITY, "zeta", 25 * r0**2, 8, 0.0)
     assert rep2 == pytest.approx((CAP_FACTOR * r0) ** 2) and dof == np.inf
     assert rec["capped"] and rec["used"]
+    assert rec["capped_rel_sd"] == pytest.approx(CAP_FACTOR * r0)
     assert "judged against 2 times that repeatability as known" in said
     assert "--rig-repeatability" in said
     rep2, dof, rec, said = pool(RIG_REPEATABILITY, "zeta", 25 * r0**2, 8, 0.0,

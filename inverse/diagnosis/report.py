@@ -9,7 +9,8 @@ and what measurement separates them), ``contradictions`` (plain strings) and
 noise), ``noise`` (per channel: source, identification and repeatability parts, dof),
 ``verdict_identification_only`` (the verdict with the identification's noise alone),
 ``verdict_own_scatter`` (where a scatter far above the assumed rig repeatability was
-judged against it: the verdict with that scatter as the noise; else None),
+judged against it: the verdict with that scatter as the noise, with its failed fits
+and folds; else None),
 ``closest_miss`` (when ``unexplained``), ``parameter_bounds`` (every fitted parameter of
 the named model with ``at_bound``), ``at_bound`` (names), ``held_out_predictions``,
 ``failures``, ``untestable``, ``separability``, ``data_warnings``, ``summary``,
@@ -117,7 +118,8 @@ def _failures(fits, cv, held, profile_failures):
 def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
              unavailable, untestable, contradictions, refuted, separability, warnings,
              predictions, selection_id_only, why_id_only, profiles,
-             profile_failures, selection_own_scatter=None) -> dict:
+             profile_failures, selection_own_scatter=None,
+             own_scatter_failures=None) -> dict:
     """The diagnosis as one JSON-ready dict (module doc)."""
     sel = selection
     cause, also, best, rivals = sel.cause, sel.also, sel.best, sel.rivals
@@ -159,6 +161,8 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
                        separability["inseparable"], unfit)
     summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
     own = _verdict_json(selection_own_scatter)
+    if own is not None:
+        own["failures"] = own_scatter_failures
     summary += _own_scatter_sentence(noise.capped(), own, (cause, also))
     summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
                                   n_top)
@@ -225,11 +229,14 @@ def _own_scatter_sentence(capped, own, verdict) -> str:
         return ""
     text = (f" The scatter of {' and '.join(capped)} is far above what a rig repeats and "
             f"was judged against {CAP_FACTOR:g} times the assumed repeatability: ")
+    failed = sum((own.get("failures") or {}).values())
+    lost = (f" ({failed} of its fits and folds failed and were left out)" if failed
+            else "")
     if (own["cause"], own["also"]) == tuple(verdict):
-        return text + "with that scatter as the noise the verdict is the same."
+        return text + f"with that scatter as the noise the verdict is the same{lost}."
     name = own["cause"] + (f" + {', '.join(own['also'])}" if own["also"] else "")
-    return text + (f"with that scatter as the noise the verdict would be {name}; a "
-                   f"repeated level tells which holds.")
+    return text + (f"with that scatter as the noise the verdict would be {name}{lost}; "
+                   f"a repeated level tells which holds.")
 
 
 def _noise_sentence(noise_json, id_only, changes, why) -> str:

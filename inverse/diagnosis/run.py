@@ -232,14 +232,18 @@ def _identification_only(models, obs, noise, cv, refuted):
 def _own_scatter(models, obs, d, stds, raw, noise):
     """The verdict with the data's own scatter as the noise where a channel's was judged
     against the assumed rig repeatability (:meth:`inverse.judge.NoiseModel.capped`;
-    every candidate, fold and contradiction again), or None when none was."""
+    every candidate, fold and contradiction again) and its failed fits and folds, or
+    (None, None) when none was."""
     if not noise.capped():
-        return None
+        return None, None
     sig = obs.sigma
     try:
-        return _judged(models, obs, *level_means_and_noise(obs, d, stds, raw, cap=False))[-1]
+        fits, _, _, _, cv, sel = _judged(models, obs,
+                                         *level_means_and_noise(obs, d, stds, raw, cap=False))
     finally:
         obs.sigma = sig
+    return sel, {"fits": sum(f.failed for f in fits.values()),
+                 "folds": sum(v[3] for v in cv.values())}
 
 
 def _profiles(fit, obs, dof):
@@ -292,7 +296,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     if best != "none" and chi_at_bound(params[best], best) is not None:
         found.append(chi_at_bound(params[best], best))
     sel_id, why_id = _identification_only(models, obs, noise, cv, refuted)
-    sel_own = _own_scatter(models, obs, d, stds, raw, noise)
+    sel_own, own_failed = _own_scatter(models, obs, d, stds, raw, noise)
     averaged = averaging_weights(sel)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
     predictions = model_averaged(       # unexplained: widened by the closest's misfit
@@ -313,6 +317,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         unavailable=unavailable, untestable=untestable, contradictions=found,
         refuted=refuted, separability=sep, warnings=warnings, predictions=predictions,
         selection_id_only=sel_id, why_id_only=why_id, profiles=profiles,
-        profile_failures=profile_failures, selection_own_scatter=sel_own)
+        profile_failures=profile_failures, selection_own_scatter=sel_own,
+        own_scatter_failures=own_failed)
     report["test"] = str(d.test[0])
     return report

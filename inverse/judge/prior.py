@@ -75,9 +75,12 @@ class RepeatabilityPrior:
         return f"{article} {self.kind} rig repeatability ({what}, {self.dof:g} dof)"
 
     def record(self, channel: str, used: bool, conflict_p=None, capped=False) -> dict:
-        """What the noise model reports of it for one channel (JSON)."""
+        """What the noise model reports of it for one channel (JSON); ``capped_rel_sd``:
+        the relative sd the data were judged against when capped (module doc)."""
         return {"rel_sd": self.rel_sd[channel], "dof": self.dof, "used": used,
-                "conflict_p": conflict_p, "capped": capped, "kind": self.kind}
+                "conflict_p": conflict_p, "capped": capped,
+                "capped_rel_sd": CAP_FACTOR * self.rel_sd[channel] if capped else None,
+                "kind": self.kind}
 
 
 #: A rig repeats a level to about 0.05 % in frequency (omega2: 0.1 %) and 3 % in
