@@ -73,7 +73,8 @@ def _diagnose(data):
     except Exception as exc:                       # counted, printed, never a number
         return {"error": f"{type(exc).__name__}: {str(exc)[:120]}",
                 "seconds": time.perf_counter() - t0}
-    ev = {k: {"p": (v.get("fit_test") or {}).get("p_value"), "gain": v.get("gain"),
+    gains = {"+".join(a["causes"]): a.get("gain") for a in r.get("alternatives") or []}
+    ev = {k: {"p": v.get("p_value"), "gain": gains.get(k),
               "weight": v.get("weight"), "why_not": v.get("why_not")}
           for k, v in (r.get("evidence") or {}).items()}
     return {"cause": r["cause"], "also": list(r["also"]),

@@ -71,20 +71,20 @@ def convergence_warnings(change, rate, roundoff, sizes) -> list[str]:
     axial bar 2). A mode whose changes are all within round-off is noted as converged.
     """
     change, roundoff = np.asarray(change, float), np.asarray(roundoff, float)
+    above = resolved_changes(change, roundoff)
     out = []
     for j in range(change.shape[1]):
         c, r = change[:-1, j], roundoff[:, j]
-        noise = ROUNDOFF_MARGIN * np.maximum(r[:-1], r[-1])
         head = f"WARNING mode {j + 1}: "
         if np.max(r) > ROUNDOFF_LIMIT:
             k = int(np.argmax(r))
             out.append(head + f"two eigen-solutions differ by {r[k]:.1e} at {1e3 * sizes[k]:g} mm "
                        f"elements: round-off, not mesh error; do not trust its frequency")
             continue
-        resolved = c > noise
+        resolved = above[:, j]
         if not resolved.any():
-            out.append(f"mode {j + 1}: changes within round-off ({np.max(noise):.1e}) on every "
-                       f"mesh: converged, its rate {rate[j]:.2f} means nothing")
+            out.append(f"mode {j + 1}: changes within round-off on every mesh: converged "
+                       f"(its rate is not defined)")
             continue
         cr = c[resolved]
         steady = resolved[:cr.size].all() and np.all(np.diff(cr) < 0)
@@ -96,15 +96,30 @@ def convergence_warnings(change, rate, roundoff, sizes) -> list[str]:
     return out
 
 
+def resolved_changes(change, roundoff) -> np.ndarray:
+    """(n_meshes - 1, n_modes) bool: the changes against the finest mesh above round-off
+    (more than :data:`ROUNDOFF_MARGIN` times the larger round-off of the mesh and the
+    finest)."""
+    change, roundoff = np.asarray(change, float), np.asarray(roundoff, float)
+    return change[:-1] > ROUNDOFF_MARGIN * np.maximum(roundoff[:-1], roundoff[-1])
+
+
 def format_case_convergence(r: dict) -> str:
+    """The table of :func:`case_convergence`: a change within round-off reads
+    ``round-off``, a rate from one ``n/a`` (their digits differ between CPUs)."""
     n = len(r["frequency_hz"][0])
+    ok = resolved_changes(r["relative_change_vs_finest"], r["roundoff_estimate"])
+    ok = np.vstack([ok, np.ones((1, n), bool)])              # the finest: 0 by definition
     lines = [f"{r['case']}: first elastic modes under mesh refinement, against "
              f"{r['reference']}",
              f"{'elem_mm':>8} {'dofs':>6} " + " ".join(f"{'mode ' + str(j + 1):>12}" for j in range(n))]
-    for h, d, f, c in zip(r["element_size_m"], r["n_free_dofs"], r["frequency_hz"],
-                          r["relative_change_vs_finest"]):
+    for h, d, f, c, k in zip(r["element_size_m"], r["n_free_dofs"], r["frequency_hz"],
+                             r["relative_change_vs_finest"], ok):
         lines.append(f"{1e3 * h:8.3f} {d:6d} " + " ".join(f"{v:12.4f}" for v in f))
-        lines.append(f"{'':8} {'':6} " + " ".join(f"{v:12.2e}" for v in c))
-    lines.append(f"{'rate':>15} " + " ".join(f"{v:12.2f}" for v in r["rate"]))
+        lines.append(f"{'':8} {'':6} " + " ".join(f"{v:12.2e}" if good else f"{'round-off':>12}"
+                                                  for v, good in zip(c, k)))
+    rated = ok[-3] & ok[-2]
+    lines.append(f"{'rate':>15} " + " ".join(f"{v:12.2f}" if good else f"{'n/a':>12}"
+                                             for v, good in zip(r["rate"], rated)))
     lines += r["warnings"]
     return "\n".join(lines)

@@ -64,6 +64,37 @@ def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
                      levels=DoubleBeamLevels.from_data)["fe"]
     assert r["cause"] == "none" and r["fit_test"]["p_value"] > 1e-3
     assert r["failures"] == {"simulations": 0, "folds": 0, "fits": 0, "profile_points": 0}
+    assert r["verdict_own_scatter"] is None          # nothing capped: no second verdict
+
+
+@pytest.mark.slow
+def test_a_damping_cycle_in_run_order_gets_a_second_verdict_at_the_fe_level():
+    """The independent series without a hidden mechanism, its damping cycled by
+    +-40-70 % (drawn) through a shuffled run order: a scatter far above what a rig
+    repeats. Judged against twice the assumed repeatability (capped) the FE level does
+    not answer ``none``; with the data's own scatter as the noise (the second verdict,
+    as the one-mode diagnosis gives it) the base FE model fits within it."""
+    from dataclasses import replace
+
+    from cases.fe_loop.diagnosis import fe_diagnosis
+    from cases.fe_loop.diagnosis_report import format_fe
+
+    rng = np.random.default_rng(2026)
+    d = draw_case(1, "none").data
+    order = rng.permutation(d.level.size) + 1
+    t = (order - 1) / (order.size - 1)
+    zeta = d.zeta * (1 + rng.uniform(0.4, 0.7) * np.sin(2 * np.pi * t
+                                                        + rng.uniform(0, 2 * np.pi)))
+    cycled = replace(d, run_order=order, zeta=zeta, zeta_std=d.zeta_std * zeta / d.zeta)
+    r = fe_diagnosis(cycled, mask=np.ones(len(d), dtype=bool), causes=("quadratic-damping",),
+                     levels=DoubleBeamLevels.from_data)["fe"]
+    assert r["noise"]["zeta"]["assumed_repeatability"]["capped"], r["noise"]["zeta"]
+    assert r["cause"] != "none", r["closest_miss"]
+    own = r["verdict_own_scatter"]
+    assert own["cause"] == "none" and own["fit_test"]["p_value"] >= 1e-3, own
+    assert own["failures"] == {"fits": 0, "folds": 0}
+    assert any("with that scatter as the noise the verdict would be none" in ln
+               for ln in format_fe(r))
 
 
 @pytest.mark.slow

@@ -15,7 +15,11 @@ realization, judged by :func:`inverse.judge.select` (fit test, so the answer can
 * ``held_out``: per held-out level the errors in Hz and in % of zeta and the 95 %
   prediction interval (the fit's delta-method sd with bound parameters held there,
   plus the noise of the level), whether the level lies inside it, and if not by how
-  many sd (``misses``, with the reason).
+  many sd (``misses``, with the reason);
+* ``verdict_own_scatter``: where a channel's scatter far above the assumed rig
+  repeatability was judged against it (:mod:`inverse.judge.prior`), the verdict with
+  that scatter as the noise (every candidate and fold again) and its failures, as the
+  one-mode diagnosis reports it; None otherwise.
 """
 from __future__ import annotations
 
@@ -28,8 +32,8 @@ from cases.fe_loop.select import chosen_model, fe_select
 from inverse.fe_selection import held_out_errors, prediction_sd
 from inverse.profile import bounded_interval, linear_grid, run_profiles
 
-__all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "parameter_table",
-           "held_out_table"]
+__all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "own_scatter_verdict",
+           "parameter_table", "held_out_table"]
 
 FIT_RULE = "all levels but the top three (at least 5 fitted)"
 #: The acceptance tolerances of issue 13 on held-out levels.
@@ -148,11 +152,29 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
         raise ValueError(f"the FE diagnosis needs at least 5 fit levels, got {int(mask.sum())}")
     fe = levels(data, force_scale=force_scale)
     s = fe_select(data, mask, fe, causes, progress)
-    return report(data, mask, s)
+    own = None
+    if s["judge_noise"].capped():
+        say = progress or (lambda m: None)
+        own = own_scatter_verdict(fe_select(data, mask, fe, causes,
+                                            lambda m: say(f"own scatter: {m}"), cap=False))
+    return report(data, mask, s, own)
 
 
-def report(data, mask, s: dict) -> dict:
-    """``fe_levels`` and ``fe`` of a :func:`fe_select` result (module docstring)."""
+def own_scatter_verdict(s: dict) -> dict:
+    """The verdict of a :func:`fe_select` result judged with the data's own scatter
+    (``cap=False``): cause, also, candidate, unexplained, fit test, failures."""
+    judged = s["judged"]
+    sel = judged["selection"]
+    cands = judged["candidates"].values()
+    return {"cause": sel.cause, "also": sel.also, "model": sel.best,
+            "unexplained": sel.unexplained, "fit_test": sel.tests[sel.best].to_json(),
+            "failures": {"fits": sum(c.fit is None for c in cands),
+                         "folds": sum(c.cv_failed for c in cands)}}
+
+
+def report(data, mask, s: dict, own: dict | None = None) -> dict:
+    """``fe_levels`` and ``fe`` of a :func:`fe_select` result (module docstring);
+    ``own``: :func:`own_scatter_verdict` of the uncapped selection, or None."""
     fe, base = s["fe"], s["base"]
     sel, judged = s["judged"]["selection"], s["judged"]
     ext, chosen = chosen_model(s)
@@ -198,7 +220,7 @@ def report(data, mask, s: dict) -> dict:
         "base_error": base_cv, "extended_error": ext_cv, "gain": ratio(base_cv, ext_cv),
         "base_error_held_out": errs_b, "extended_error_held_out": errs_e,
         "gain_held_out": ratio(errs_b, errs_e),
-        "held_out": rows, "misses": misses,
+        "held_out": rows, "misses": misses, "verdict_own_scatter": own,
         "acceptance": {"tolerance_hz": TOLERANCE_HZ, "tolerance_zeta_rel": TOLERANCE_ZETA_REL,
                        "met": met},
         "failures": failures,

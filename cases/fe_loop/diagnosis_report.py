@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from inverse.diagnosis.report import own_scatter_sentence
+
 __all__ = ["add_fe_diagnosis", "format_fe", "write_fe_files"]
 
 _DONE: dict = {}   # FE diagnoses of this process, by a digest of their data
@@ -60,6 +62,7 @@ def format_fe(fe: dict) -> list:
              f"  fit of {fe['candidate']}: rms {ft['rms_standardized']:.3g} noise sd, p = "
              f"{_g(ft['p_value'], '.2g')} ({ft['test']})",
              "  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),
+             *_own_scatter_lines(fe),
              f"  cross-validated: base error {_g(fe['base_error'])}, extended "
              f"{_g(fe['extended_error'])}, gain {_g(fe['gain'])}",
              f"  held out: base error {_g(fe['base_error_held_out'])}, extended "
@@ -93,6 +96,15 @@ def format_fe(fe: dict) -> list:
                      f"{r['z_frequency']:+6.1f} / {r['z_zeta']:+.1f}")
     lines.append("  " + acceptance_text(fe))
     return lines
+
+
+def _own_scatter_lines(fe: dict) -> list:
+    """The verdict with the data's own scatter, where a channel's was capped."""
+    capped = [c for c, n in fe["noise"].items()
+              if (n.get("assumed_repeatability") or {}).get("capped")]
+    text = own_scatter_sentence(capped, fe.get("verdict_own_scatter"),
+                                (fe["cause"], fe["also"]))
+    return ["  " + text.strip()] if text else []
 
 
 def acceptance_text(fe: dict) -> str:

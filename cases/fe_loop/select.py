@@ -42,13 +42,19 @@ __all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable
 
 #: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
 MICRO_LIMIT = 50.0
+#: Largest stuck frequency of the paper's estimator taken as a start, over the first
+#: level's frequency (assumed: a joint that softens a mode by 25 % between zero amplitude
+#: and its lowest tested level is past micro-slip there).
+ESTIMATE_F0_MAX = 1.25
 
 
 def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
     """Parameters of the base model and their starts; the start list holds the paper's
     estimator (``exact``, the fit levels), two others of chi and, when the estimator
     gave the first, the start from the first level alone (the frequency bounds hold
-    both)."""
+    both). The estimator is not used where its stuck frequency lies more than
+    :data:`ESTIMATE_F0_MAX` times above the first level's (a scatter in damping can
+    throw its extrapolation to zero amplitude far off)."""
     lv = [int(v) for v in data.level[mask]]
     w1 = math.sqrt(float(data.omega2[0]))
     naive = {"chi": -0.4, "ln_dc1": math.log(2.0 * float(data.omega2[0]) * 1e-4),
@@ -57,7 +63,9 @@ def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
     zv0, f00 = naive["zeta_v"], naive["f0_hz"]
     try:
         est = estimate(data, fit_levels=lv, method="exact")
-        if -0.98 < est.chi < -0.005 and est.kappa1_B > 0:
+        f_est = math.sqrt(est.omega2_linear) / (2 * math.pi) if est.omega2_linear > 0 else 0
+        if (-0.98 < est.chi < -0.005 and est.kappa1_B > 0
+                and f_est <= ESTIMATE_F0_MAX * naive["f0_hz"]):
             chi0, dc0 = est.chi, est.kappa1_B
             zv0 = est.c_modal / (2.0 * math.sqrt(est.omega2_linear))
             f00 = math.sqrt(est.omega2_linear) / (2 * math.pi)
@@ -103,15 +111,15 @@ class Headline:
 
 
 
-def fe_noise(data):
+def fe_noise(data, cap: bool = True):
     """(judge noise, :class:`inverse.update.NoiseModel` of its totals) of one mode's
-    levels (module docstring)."""
+    levels (module docstring); ``cap`` as in :func:`inverse.judge.noise_model`."""
     x = np.asarray(data.response_amplitude, float) if data.response_abscissa else \
         data.excitation / (data.zeta * data.omega2)
     jn = judge.noise_model(x, {"omega2": data.omega2, "zeta": data.zeta},
                            {"omega2": data.omega2_std, "zeta": data.zeta_std},
                            data.level, data.run_order,
-                           prior=judge.prior_for(data.rig_repeatability))
+                           prior=judge.prior_for(data.rig_repeatability), cap=cap)
     dof = [jn.dof[c] for c in ("omega2", "zeta")]
     words = "; ".join(f"{c}: {jn.source[c]}" for c in ("omega2", "zeta"))
     return jn, NoiseModel(jn.total["omega2"], jn.total["zeta"], words,
@@ -136,8 +144,11 @@ FIT_TOL = 1e-6
 def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
     """The best fit from ``starts``, and the starts."""
     best = None
+    reset = getattr(problem.simulate, "reset", None)
     for s in starts:
         f = fit(problem, free, start=s, tol=FIT_TOL)
+        if not f.success and reset is not None:
+            reset()        # a failed start leaves no warm starts to the next one
         if best is None or (f.success, -f.chi2) > (best.success, -best.chi2):
             best = f
     return best, list(starts)
@@ -190,9 +201,11 @@ def _inactive(ext, f) -> bool:
 
 
 def fe_select(data, mask, fe: FELevels, causes=None,
-              progress=None) -> dict:
+              progress=None, cap: bool = True) -> dict:
     """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring);
-    ``causes``: the extensions to try (None: every one; empty: the base model alone).
+    ``causes``: the extensions to try (None: every one; empty: the base model alone);
+    ``cap``: judge a scatter far above the assumed rig repeatability against it
+    (:func:`fe_noise`).
 
     Returns ``fe``, ``noise`` (update form), ``judge_noise``, ``base`` (FitCandidate),
     ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
@@ -200,20 +213,27 @@ def fe_select(data, mask, fe: FELevels, causes=None,
     ``chosen`` (name of the selected candidate: the closest one when unexplained)."""
     try:
         return _select(data, mask, fe, causes,
-                       progress or (lambda s: None))
+                       progress or (lambda s: None), cap)
     except ValueError as exc:          # the input was checked before: ours, not the user's
         raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
 
 
-def _select(data, mask, fe, causes, say) -> dict:
-    jn, noise = fe_noise(data)
+def _select(data, mask, fe, causes, say, cap=True) -> dict:
+    jn, noise = fe_noise(data, cap)
     P, starts = base_parameters(data, mask, fe)
     base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
                                  describe=Headline(fe, ~mask))
     say("base")
     bfit, base_starts = fit_base(base_problem, starts)
+    if not bfit.success:
+        raise InternalError(f"the base FE model could not be fitted from any of its "
+                            f"{len(base_starts)} starts ({bfit.message})")
     base = FitCandidate((), base_problem, bfit, base_starts)
-    base_pred = fe.predict(bfit.values)
+    try:
+        base_pred = fe.predict(bfit.values)
+    except SIMULATION_FAILURES:      # the warm starts of the last fit evaluation
+        fe.reset()
+        base_pred = fe.predict(bfit.values)
     top = int(np.flatnonzero(mask).max())
     skip = untestable(data)
     exts, singles = {}, []

@@ -25,7 +25,7 @@ from inverse.diagnosis.text import describe, extrapolation_note
 from inverse.judge import P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Bounded, at_bound
 from inverse.judge.prior import CAP_FACTOR
 
-__all__ = ["assemble", "ERROR_MEASURE"]
+__all__ = ["assemble", "ERROR_MEASURE", "own_scatter_sentence"]
 
 ERROR_MEASURE = ("rms standardized prediction error ((data - prediction) / noise level) "
                  "over the levels left out of the fit and every channel (omega2, zeta, "
@@ -163,7 +163,7 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
     own = _verdict_json(selection_own_scatter)
     if own is not None:
         own["failures"] = own_scatter_failures
-    summary += _own_scatter_sentence(noise.capped(), own, (cause, also))
+    summary += own_scatter_sentence(noise.capped(), own, (cause, also))
     summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
                                   n_top)
     if on_bound:
@@ -223,8 +223,10 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
     }
 
 
-def _own_scatter_sentence(capped, own, verdict) -> str:
-    """What the verdict would be with the data's own scatter where it was capped."""
+def own_scatter_sentence(capped, own, verdict) -> str:
+    """What the verdict would be with the data's own scatter where it was capped
+    (``capped``: the channels; ``own``: the verdict's JSON with ``cause``, ``also`` and
+    ``failures``; ``verdict``: (cause, also) judged against the capped noise)."""
     if not capped or own is None:
         return ""
     text = (f" The scatter of {' and '.join(capped)} is far above what a rig repeats and "
