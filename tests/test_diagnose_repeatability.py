@@ -85,6 +85,7 @@ def test_repeats_give_the_noise_and_identification_only_changes_the_verdict():
     assert 0.3e-3 < n["total_rel"] < 3e-3
     assert r["verdict_identification_only"] is not None
     assert r["verdict_identification_only"]["cause"] != "none"
+    assert r["verdict_identification_only"]["failures"] == {"fits": 0}   # counted
     assert r["verdict_changes_with_identification_only"] is True
     assert "identification's noise alone" in r["summary"]
 

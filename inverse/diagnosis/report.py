@@ -7,7 +7,9 @@ and what measurement separates them), ``contradictions`` (plain strings) and
 ``base_error``, ``extended_error``, ``gain``, ``gain_held_out``, ``error_measure``,
 ``evidence`` (per candidate), ``fit_test`` (the named or closest model against the
 noise), ``noise`` (per channel: source, identification and repeatability parts, dof),
-``verdict_identification_only`` (the verdict with the identification's noise alone),
+``verdict_identification_only`` (the verdict with the identification's noise alone,
+its failed fits counted; its held-out gains are those of the folds with the total
+noise),
 ``verdict_own_scatter`` (where a scatter far above the assumed rig repeatability was
 judged against it: the verdict with that scatter as the noise, with its failed fits
 and folds; else None),
@@ -118,6 +120,7 @@ def _failures(fits, cv, held, profile_failures):
 def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
              unavailable, untestable, contradictions, refuted, separability, warnings,
              predictions, selection_id_only, why_id_only, profiles,
+             id_only_failures=None,
              profile_failures, selection_own_scatter=None,
              own_scatter_failures=None) -> dict:
     """The diagnosis as one JSON-ready dict (module doc)."""
@@ -155,6 +158,9 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
     values = {"omega2": obs.omega2, "zeta": obs.zeta, "response": obs.log_r}
     noise_json = noise.to_json(values)
     id_only = _verdict_json(selection_id_only)
+    if id_only is not None:
+        id_only["failures"] = id_only_failures
+        id_only["gains"] = "the held-out gains of the folds with the total noise"
     changes = None if id_only is None else (id_only["cause"], id_only["also"]) != (cause, also)
     summary = describe(cause, also, params[best], named_gain, sel.tests[best].to_json(),
                        contradictions, best, rivals, np.unique(obs.levels).size,
@@ -247,6 +253,10 @@ def _noise_sentence(noise_json, id_only, changes, why) -> str:
     text = " Judged against the noise: " + "; ".join(parts) + "."
     if id_only is None:
         return text + f" With the identification's noise alone: not judged ({why})."
+    failed = (id_only.get("failures") or {}).get("fits")
+    if failed:
+        text += (f" With the identification's noise alone {failed} fit(s) failed and were "
+                 f"left out.")
     if changes:
         return text + (f" With the identification's noise alone the verdict would be "
                        f"{id_only['cause']}" + (f" + {', '.join(id_only['also'])}"

@@ -213,11 +213,13 @@ def _judged(models, obs, noise, dm, mean_noise):
 
 
 def _identification_only(models, obs, noise, cv, refuted):
-    """The verdict with the identification's noise alone (refitted), or None with why."""
+    """The verdict with the identification's noise alone (every candidate refitted; the
+    held-out gains are those of the folds with the total noise) and its failed fits, or
+    (None, why, None)."""
     if not noise.has_identification():
-        return None, "the table has no identification uncertainty (no std columns)"
+        return None, "the table has no identification uncertainty (no std columns)", None
     if all(np.all(r == 0) for r in noise.repeatability.values()):
-        return None, "the repeatability adds nothing to the identification's noise"
+        return None, "the repeatability adds nothing to the identification's noise", None
     only = noise.identification_only()
     sig = obs.sigma
     obs.sigma = only.total
@@ -226,7 +228,7 @@ def _identification_only(models, obs, noise, cv, refuted):
         sel = select(_candidates(fits, cv, obs, refuted), only)
     finally:
         obs.sigma = sig
-    return sel, None
+    return sel, None, {"fits": sum(f.failed for f in fits.values())}
 
 
 def _own_scatter(models, obs, d, stds, raw, noise):
@@ -295,7 +297,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
                 f"identification of nonlinear FRFs; a response-controlled test would tell")
     if best != "none" and chi_at_bound(params[best], best) is not None:
         found.append(chi_at_bound(params[best], best))
-    sel_id, why_id = _identification_only(models, obs, noise, cv, refuted)
+    sel_id, why_id, id_failed = _identification_only(models, obs, noise, cv, refuted)
     sel_own, own_failed = _own_scatter(models, obs, d, stds, raw, noise)
     averaged = averaging_weights(sel)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
@@ -316,7 +318,8 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         held=held, n_top=n_top(np.unique(obs.levels).size), noise=noise, averaged=averaged,
         unavailable=unavailable, untestable=untestable, contradictions=found,
         refuted=refuted, separability=sep, warnings=warnings, predictions=predictions,
-        selection_id_only=sel_id, why_id_only=why_id, profiles=profiles,
+        selection_id_only=sel_id, why_id_only=why_id, id_only_failures=id_failed,
+        profiles=profiles,
         profile_failures=profile_failures, selection_own_scatter=sel_own,
         own_scatter_failures=own_failed)
     report["test"] = str(d.test[0])
