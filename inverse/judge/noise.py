@@ -96,6 +96,8 @@ WARM_UP_RUNS = (0.7, 1.5, 3.0)
 RUN_ORDER_GAIN = 0.3
 #: Curves in amplitude that the run-order terms are tried with (the best by PRESS).
 _N_TRIED = 5
+#: Relative round-off of a fitted value: leave-one-out errors below it are ties.
+ROUNDOFF = 1e-12
 
 
 def _curves(x):
@@ -152,16 +154,20 @@ def _scatter(x, y, t=None, reserved: int = 0):
     if n < 3:
         return 0.0, 0, None, none, 0
     t = None if t is None else np.asarray(t, float)
+    # leave-one-out errors at round-off are ties (which exact fit comes first would
+    # depend on the CPU): floored there, the fewest parameters win
+    tiny = x.size * (ROUNDOFF * float(np.max(np.abs(y)))) ** 2
     fits = []
     for k, cols in _curves(x):
         if n - k >= 1 and (f := _press(cols, y)) is not None:
-            fits.append((f[0], f[1], k, cols))
-    fits.sort(key=lambda f: f[0])
+            fits.append((max(f[0], tiny), f[1], k, cols))
+    fits.sort(key=lambda f: (f[0], f[2]))
     best = (*fits[0][:3], None, none, 0)
     for _, _, k, cols in (fits[:_N_TRIED] if t is not None else []):
         for kt, extra, words in _run_order_terms(t):
             if n - k - kt < 1 or (f := _press(cols + extra, y)) is None:
                 continue
+            f = (max(f[0], tiny), f[1])
             if f[0] < min(RUN_ORDER_GAIN * fits[0][0], best[0]):
                 a = np.column_stack(cols + extra)
                 coef = np.linalg.lstsq(a, y, rcond=None)[0]
