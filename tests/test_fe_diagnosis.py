@@ -65,6 +65,7 @@ def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
     assert r["cause"] == "none" and r["fit_test"]["p_value"] > 1e-3
     assert r["failures"] == {"simulations": 0, "folds": 0, "fits": 0, "profile_points": 0}
     assert r["verdict_own_scatter"] is None          # nothing capped: no second verdict
+    assert r["estimator_start"] == "used"
 
 
 @pytest.mark.slow
@@ -94,6 +95,11 @@ def test_a_damping_cycle_in_run_order_gets_a_second_verdict_at_the_fe_level():
     assert own["cause"] == "none" and own["fit_test"]["p_value"] >= 1e-3, own
     assert own["failures"] == {"fits": 0, "folds": 0}
     assert any("with that scatter as the noise the verdict would be none" in ln
+               for ln in format_fe(r))
+    # the damping's scatter threw the paper's estimator off (its stuck frequency far
+    # above the data's): the base fit started without it, and says so
+    assert "stuck frequency" in r["estimator_start"], r["estimator_start"]
+    assert any(ln.strip().startswith("base fit started without the paper's estimator")
                for ln in format_fe(r))
 
 

@@ -75,6 +75,9 @@ def format_fe(fe: dict) -> list:
                      + (f"  ({e['why_not']})" if e["why_not"] else ""))
     for c, why in fe["untested"].items():
         lines.append(f"  not tested: {c} ({why})")
+    if fe.get("estimator_start", "used") != "used":
+        lines.append(f"  base fit started without the paper's estimator: "
+                     f"{fe['estimator_start']}")
     fl = fe["failures"]
     lines.append(f"  failures: {fl['simulations']} simulations, {fl['folds']} folds, "
                  f"{fl['fits']} fits, {fl['profile_points']} profile points")

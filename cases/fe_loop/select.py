@@ -37,7 +37,7 @@ from inverse.estimate import estimate
 from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Parameter,
                             UpdateProblem, fit)
 
-__all__ = ["MICRO_LIMIT", "base_parameters", "Headline", "fe_noise", "untestable",
+__all__ = ["MICRO_LIMIT", "estimator_start", "base_parameters", "Headline", "fe_noise", "untestable",
            "fit_base", "cold_failure", "fe_select", "chosen_model"]
 
 #: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
@@ -48,29 +48,44 @@ MICRO_LIMIT = 50.0
 ESTIMATE_F0_MAX = 1.25
 
 
-def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
+def estimator_start(data, levels) -> tuple[dict | None, str | None]:
+    """The paper's estimator (``exact``, on ``levels``) as a start of the base fit:
+    (``chi``, ``ln_dc1``, ``zeta_v``, ``f0_hz``) and None, or None and why it is not
+    used (it failed, chi or kappa1 B~ outside the fit's box, or its stuck frequency more
+    than :data:`ESTIMATE_F0_MAX` times the first level's: a scatter in damping can throw
+    its extrapolation to zero amplitude far off)."""
+    try:
+        est = estimate(data, fit_levels=levels, method="exact")
+    except ValueError as exc:
+        return None, f"the paper's estimator failed ({str(exc)[:80]})"
+    if not -0.98 < est.chi < -0.005:
+        return None, f"the paper's estimator gave chi = {est.chi:.3g}, outside (-0.98, -0.005)"
+    if not est.kappa1_B > 0:
+        return None, (f"the paper's estimator gave kappa1 B~ = {est.kappa1_B:.3g} <= 0 "
+                      "(damping that does not grow with level)")
+    f_est = math.sqrt(max(est.omega2_linear, 0.0)) / (2 * math.pi)
+    f1 = math.sqrt(float(data.omega2[0])) / (2 * math.pi)
+    if not 0 < f_est <= ESTIMATE_F0_MAX * f1:
+        return None, (f"the paper's estimator put the stuck frequency at {f_est:.4g} Hz, "
+                      f"not within {ESTIMATE_F0_MAX:g} times the first level's {f1:.4g} Hz "
+                      "(assumed limit)")
+    return {"chi": est.chi, "ln_dc1": math.log(est.kappa1_B),
+            "zeta_v": est.c_modal / (2.0 * math.sqrt(est.omega2_linear)), "f0_hz": f_est}, None
+
+
+def base_parameters(data, mask, fe: FELevels, estimated=None) -> tuple[dict, list]:
     """Parameters of the base model and their starts; the start list holds the paper's
-    estimator (``exact``, the fit levels), two others of chi and, when the estimator
-    gave the first, the start from the first level alone (the frequency bounds hold
-    both). The estimator is not used where its stuck frequency lies more than
-    :data:`ESTIMATE_F0_MAX` times above the first level's (a scatter in damping can
-    throw its extrapolation to zero amplitude far off)."""
+    estimator (:func:`estimator_start`, the fit levels; ``estimated``: its result when
+    already computed), two others of chi and, when the estimator gave the first, the
+    start from the first level alone (the frequency bounds hold both)."""
     lv = [int(v) for v in data.level[mask]]
     w1 = math.sqrt(float(data.omega2[0]))
     naive = {"chi": -0.4, "ln_dc1": math.log(2.0 * float(data.omega2[0]) * 1e-4),
              "zeta_v": float(data.zeta[0]), "f0_hz": w1 / (2 * math.pi)}
-    chi0, dc0 = naive["chi"], math.exp(naive["ln_dc1"])
-    zv0, f00 = naive["zeta_v"], naive["f0_hz"]
-    try:
-        est = estimate(data, fit_levels=lv, method="exact")
-        f_est = math.sqrt(est.omega2_linear) / (2 * math.pi) if est.omega2_linear > 0 else 0
-        if (-0.98 < est.chi < -0.005 and est.kappa1_B > 0
-                and f_est <= ESTIMATE_F0_MAX * naive["f0_hz"]):
-            chi0, dc0 = est.chi, est.kappa1_B
-            zv0 = est.c_modal / (2.0 * math.sqrt(est.omega2_linear))
-            f00 = math.sqrt(est.omega2_linear) / (2 * math.pi)
-    except ValueError:
-        est = None
+    est, _ = estimator_start(data, lv) if estimated is None else estimated
+    first = est or naive
+    chi0, dc0 = first["chi"], math.exp(first["ln_dc1"])
+    zv0, f00 = first["zeta_v"], first["f0_hz"]
     P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
          "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
                              "ln |kappa1| B~ at level 1: the joints' modal damping there"),
@@ -86,7 +101,7 @@ def base_parameters(data, mask, fe: FELevels) -> tuple[dict, list]:
                                 "1", "ln(phi_max / a_ref): macro-slip onset in units of "
                                 "the level-1 joint slip (beta = 0 above its limit)")}
     starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
-    if est is not None and chi0 != naive["chi"]:   # a noisy series can mislead the estimator
+    if est is not None:                  # a noisy series can mislead the estimator
         starts.append(naive)
     return P, starts
 
@@ -209,8 +224,10 @@ def fe_select(data, mask, fe: FELevels, causes=None,
 
     Returns ``fe``, ``noise`` (update form), ``judge_noise``, ``base`` (FitCandidate),
     ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
-    :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason) and
-    ``chosen`` (name of the selected candidate: the closest one when unexplained)."""
+    :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason),
+    ``chosen`` (name of the selected candidate: the closest one when unexplained) and
+    ``estimator_start`` ("used", or why the paper's estimator gave no start:
+    :func:`estimator_start`)."""
     try:
         return _select(data, mask, fe, causes,
                        progress or (lambda s: None), cap)
@@ -220,7 +237,8 @@ def fe_select(data, mask, fe: FELevels, causes=None,
 
 def _select(data, mask, fe, causes, say, cap=True) -> dict:
     jn, noise = fe_noise(data, cap)
-    P, starts = base_parameters(data, mask, fe)
+    estimated = estimator_start(data, [int(v) for v in data.level[mask]])
+    P, starts = base_parameters(data, mask, fe, estimated)
     base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
                                  describe=Headline(fe, ~mask))
     say("base")
@@ -283,7 +301,8 @@ def _select(data, mask, fe, causes, say, cap=True) -> dict:
                                                    s, why))
     judged = judge_extensions(base, [c for _, c in exts.values()], jn, progress=say)
     return {"fe": fe, "noise": noise, "judge_noise": jn, "base": base, "extensions": exts,
-            "judged": judged, "untested": skip, "chosen": judged["selection"].best}
+            "judged": judged, "untested": skip, "chosen": judged["selection"].best,
+            "estimator_start": estimated[1] or "used"}
 
 
 def chosen_model(s: dict):

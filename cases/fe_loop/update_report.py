@@ -161,6 +161,7 @@ def summary(r: dict) -> dict:
             "unexplained": sel.unexplained, "fit_test": test.to_json(),
             "evidence": r["selection"]["judged"]["evidence"],
             "untested": r["selection"]["untested"], "rule": "inverse.judge.select",
+            "estimator_start": r["selection"]["estimator_start"],
             "failed_simulations": best.failed_simulations,
             "sensitivity": sens, "assumptions": assumptions,
             "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
@@ -204,6 +205,8 @@ def format_text(s: dict) -> str:
                      f"{row['slip_over_phi_max']:11.3g}")
     for c, why in s["untested"].items():
         lines.append(f"not tested: {c} ({why})")
+    if s.get("estimator_start", "used") != "used":
+        lines.append(f"base fit started without the paper's estimator: {s['estimator_start']}")
     lines.append("misfit:")
     lines.extend(f"  - {t}" for t in s["misfit"])
     for name, sv in s["sensitivity"].items():
