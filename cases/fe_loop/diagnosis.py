@@ -163,13 +163,9 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
 def own_scatter_verdict(s: dict) -> dict:
     """The verdict of a :func:`fe_select` result judged with the data's own scatter
     (``cap=False``): cause, also, candidate, unexplained, fit test, failures."""
-    judged = s["judged"]
-    sel = judged["selection"]
-    cands = judged["candidates"].values()
-    return {"cause": sel.cause, "also": sel.also, "model": sel.best,
-            "unexplained": sel.unexplained, "fit_test": sel.tests[sel.best].to_json(),
-            "failures": {"fits": sum(c.fit is None for c in cands),
-                         "folds": sum(c.cv_failed for c in cands)}}
+    cands = s["judged"]["candidates"].values()
+    return s["judged"]["selection"].verdict_json(
+        {"fits": sum(c.fit is None for c in cands), "folds": sum(c.cv_failed for c in cands)})
 
 
 def report(data, mask, s: dict, own: dict | None = None) -> dict:

@@ -100,13 +100,6 @@ def parameter_bounds(fit, obs, profiles=None, rtol: float = 1e-3) -> dict:
     return out
 
 
-def _verdict_json(sel):
-    if sel is None:
-        return None
-    return {"cause": sel.cause, "also": sel.also, "model": sel.best,
-            "fit_test": sel.tests[sel.best].to_json()}
-
-
 def _failures(fits, cv, held, profile_failures):
     fits_failed = [k for k, f in fits.items() if f.failed]
     folds = {k: v[3] for k, v in cv.items() if v[3]}
@@ -157,18 +150,17 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
     on_bound = [k for k, b in bounds.items() if b["at_bound"]]
     values = {"omega2": obs.omega2, "zeta": obs.zeta, "response": obs.log_r}
     noise_json = noise.to_json(values)
-    id_only = _verdict_json(selection_id_only)
+    id_only = (None if selection_id_only is None
+               else selection_id_only.verdict_json(id_only_failures))
     if id_only is not None:
-        id_only["failures"] = id_only_failures
         id_only["gains"] = "the held-out gains of the folds with the total noise"
     changes = None if id_only is None else (id_only["cause"], id_only["also"]) != (cause, also)
     summary = describe(cause, also, params[best], named_gain, sel.tests[best].to_json(),
                        contradictions, best, rivals, np.unique(obs.levels).size,
                        separability["inseparable"], unfit)
     summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
-    own = _verdict_json(selection_own_scatter)
-    if own is not None:
-        own["failures"] = own_scatter_failures
+    own = (None if selection_own_scatter is None
+           else selection_own_scatter.verdict_json(own_scatter_failures))
     summary += own_scatter_sentence(noise.capped(), own, (cause, also))
     summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
                                   n_top)

@@ -141,6 +141,16 @@ class Selection:
     def ambiguous(self) -> bool:
         return bool(self.rivals)
 
+    def verdict_json(self, failures=None) -> dict:
+        """The verdict alone (a second verdict's JSON): ``cause``, ``also``, ``model``
+        (the candidate named, the closest one when unexplained), ``unexplained``,
+        ``fit_test`` and, when given, ``failures``."""
+        out = {"cause": self.cause, "also": self.also, "model": self.best,
+               "unexplained": self.unexplained, "fit_test": self.tests[self.best].to_json()}
+        if failures is not None:
+            out["failures"] = failures
+        return out
+
 
 def _why_not(c: Candidate, test: FitTest, p_min: float):
     if c.excluded:
