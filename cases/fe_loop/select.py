@@ -16,7 +16,9 @@ curve families), so the FE level and the one-mode diagnosis judge the same table
 against the same noise.
 
 Not tested (:func:`untestable`): ``thermal-drift`` when the run order is monotone in
-amplitude (a drift with time cannot be told from an amplitude effect);
+amplitude, a repeat run next to its level counting with it
+(:func:`inverse.judge.time_separable`, the one-mode diagnosis's rule: a drift with time
+cannot be told from an amplitude effect);
 ``nonproportional-amplitude`` always (the FE fit compares omega^2 and zeta only: a force
 shortfall changes the abscissa of a law that chi already bends; it needs a response
 channel).
@@ -126,12 +128,17 @@ class Headline:
 
 
 
+def _abscissa(data):
+    """The one-mode diagnosis's abscissa: the held response amplitude, else
+    ``excitation / (zeta omega^2)``."""
+    return np.asarray(data.response_amplitude, float) if data.response_abscissa else \
+        data.excitation / (data.zeta * data.omega2)
+
+
 def fe_noise(data, cap: bool = True):
     """(judge noise, :class:`inverse.update.NoiseModel` of its totals) of one mode's
     levels (module docstring); ``cap`` as in :func:`inverse.judge.noise_model`."""
-    x = np.asarray(data.response_amplitude, float) if data.response_abscissa else \
-        data.excitation / (data.zeta * data.omega2)
-    jn = judge.noise_model(x, {"omega2": data.omega2, "zeta": data.zeta},
+    jn = judge.noise_model(_abscissa(data), {"omega2": data.omega2, "zeta": data.zeta},
                            {"omega2": data.omega2_std, "zeta": data.zeta_std},
                            data.level, data.run_order,
                            prior=judge.prior_for(data.rig_repeatability), cap=cap)
@@ -145,9 +152,9 @@ def untestable(data) -> dict:
     """Causes the data cannot test at the FE level, with the reason (module docstring)."""
     out = {"nonproportional-amplitude": "the FE fit compares omega2 and zeta only; a force "
                                         "shortfall needs a response channel"}
-    ro = np.asarray(data.run_order)
-    if np.all(np.diff(ro) > 0) or np.all(np.diff(ro) < 0):
-        out["thermal-drift"] = ("the levels were run in order of amplitude: a drift with "
+    if not judge.time_separable(data.level, data.run_order, _abscissa(data)):
+        out["thermal-drift"] = ("the levels were run in order of amplitude (a repeat run "
+                                "next to its level counts with it): a drift with "
                                 "time cannot be told from an amplitude effect")
     return out
 

@@ -51,18 +51,13 @@ from inverse.diagnosis.report import assemble
 from inverse.diagnosis.separability import separability
 from inverse.diagnosis.text import chi_at_bound, own_contradictions
 from inverse.judge import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, at_bound, prior_for,
-                           effective_dof, select)
+                           effective_dof, select, time_separable)
 
 __all__ = ["CAUSES", "ALL_CAUSES", "T_CAUSE", "W_AMBIGUOUS", "observations_from",
            "diagnose"]
 
 ALL_CAUSES = ("none",) + CAUSES + ("unexplained",)
 _REFUTING = ("frequency-rises", "tie-violated", "no-joint")
-
-
-def _monotone(run_order) -> bool:
-    d = np.diff(run_order)
-    return bool(np.all(d > 0) or np.all(d < 0))
 
 
 def observations_from(data: MeasuredData, mode: int | None = None):
@@ -105,7 +100,7 @@ def observations_from(data: MeasuredData, mode: int | None = None):
     obs = Observations(level=d.level, s=s, omega2=d.omega2, zeta=d.zeta,
                        t_run=(run - run.min()) / span if span > 0 else 0 * run,
                        log_r=log_r, response_controlled=rc, sigma={},
-                       run_monotone=_monotone(d.run_order), run_span=span,
+                       run_monotone=not time_separable(d.level, d.run_order, raw), run_span=span,
                        level_ids=d.level)
     stds = {"omega2": d.omega2_std, "zeta": d.zeta_std, "response": None}
     return obs, d, stds, raw, warnings

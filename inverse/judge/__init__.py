@@ -77,7 +77,7 @@ from __future__ import annotations
 
 from inverse.judge.bounds import Bounded, at_bound
 from inverse.judge.noise import (FLOORS, MIN_REPEAT_DOF, NoiseModel, noise_model,
-                                 pooled_repeats, smooth_scatter)
+                                 pooled_repeats, smooth_scatter, time_separable)
 from inverse.judge.power import detection_bound, naming_power
 from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, prior_for
 from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candidate, FitTest,
@@ -86,7 +86,8 @@ from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candid
                                      fit_test, known_noise_equivalent, select)
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
-           "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "FitTest",
+           "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "time_separable",
+           "FitTest",
            "fit_test", "effective_dof", "drop_dof", "known_noise_equivalent",
            "drop_for_known_noise",
            "Candidate", "Selection", "select", "Bounded", "at_bound", "detection_bound",

@@ -11,7 +11,7 @@ from scipy.stats import chi2 as chi2_dist
 
 from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, pool
 
-__all__ = ["MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
+__all__ = ["time_separable", "MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
            "pooled_repeats"]
 
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
@@ -221,6 +221,24 @@ def _plural(n, word):
     return f"{n} {word}{'' if n == 1 else 's'}"
 
 
+def time_separable(level_ids, run_order, amplitude=None) -> bool:
+    """Whether a change with time can be told from one with amplitude: the mean run
+    order of each level, the levels taken in order of amplitude (the mean of
+    ``amplitude`` per level; default the level ids' order), is not strictly monotone.
+    A level run twice in a row (or both of its runs at the same end of the test)
+    leaves it monotone: the repeat measures the repeatability, not a drift across the
+    test, and a drift fitted there would bend with amplitude."""
+    level_ids = np.asarray(level_ids)
+    labels = np.unique(level_ids)
+    t = np.asarray(run_order, float)
+    tm = np.array([np.mean(t[level_ids == g]) for g in labels])
+    if amplitude is not None:
+        a = np.asarray(amplitude, float)
+        tm = tm[np.argsort([np.mean(a[level_ids == g]) for g in labels], kind="stable")]
+    dt = np.diff(tm)
+    return not (np.all(dt > 0) or np.all(dt < 0))
+
+
 def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
                 floors: dict | None = None, model_error: dict | None = None,
                 prior: RepeatabilityPrior | None = RIG_REPEATABILITY,
@@ -251,13 +269,8 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
     x = np.log(np.asarray(abscissa, float))
     ident, rep, total, source, dof, kind, floor, assumed = {}, {}, {}, {}, {}, {}, {}, {}
     labels = np.unique(level_ids)
-    tm = None
-    if run_order is not None:
-        tm = np.array([np.mean(np.asarray(run_order, float)[level_ids == g])
-                       for g in labels])
-        dt = np.diff(tm[np.argsort([np.mean(x[level_ids == g]) for g in labels])])
-        tm = None if np.all(dt > 0) or np.all(dt < 0) else tm
-    rows_t = None if tm is None else np.asarray(run_order, float)
+    rows_t = (np.asarray(run_order, float) if run_order is not None
+              and time_separable(level_ids, run_order, x) else None)
     for c, y in values.items():
         y = np.asarray(y, float)
         rel = c in _RELATIVE

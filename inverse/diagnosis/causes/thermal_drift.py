@@ -6,8 +6,9 @@ One-mode model: ``omega2 += d f(t_v)``, ``t_v`` the run order scaled to [0, 1],
 ``u = (t - t_0)/(1 - t_0)``: an exponential approach to a new temperature (Newton's law
 of cooling) from the start of the test or from a change of the surroundings during it
 (``t_0`` > 0; a large ``b`` makes it a step), linear at ``b = 0``, accelerating for
-``b < 0``. Not testable on a monotone run order (time and amplitude are then one
-variable).
+``b < 0``. Not testable on a run order monotone in amplitude, a repeat run next to
+its level counting with it (time and amplitude are then one variable:
+:func:`inverse.judge.time_separable`).
 """
 from __future__ import annotations
 
@@ -63,8 +64,9 @@ def signature(obs, base):
 
 
 def testable(obs):
-    """Not on a monotone run order."""
+    """Not on a run order monotone in amplitude (:func:`inverse.judge.time_separable`)."""
     if obs.run_monotone:
-        return False, ("the levels were run in order of amplitude: a drift with time "
+        return False, ("the levels were run in order of amplitude (a repeat run next "
+                       "to its level counts with it): a drift with time "
                        "cannot be told from an amplitude effect")
     return True, None
