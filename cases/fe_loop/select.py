@@ -153,8 +153,7 @@ def untestable(data) -> dict:
     out = {"nonproportional-amplitude": "the FE fit compares omega2 and zeta only; a force "
                                         "shortfall needs a response channel"}
     if not judge.time_separable(data.level, data.run_order, _abscissa(data)):
-        out["thermal-drift"] = ("the levels were run in order of amplitude (a repeat run "
-                                "next to its level counts with it): a drift with "
+        out["thermal-drift"] = ("the levels were run in order of amplitude: a drift with "
                                 "time cannot be told from an amplitude effect")
     return out
 

@@ -66,7 +66,6 @@ def signature(obs, base):
 def testable(obs):
     """Not on a run order monotone in amplitude (:func:`inverse.judge.time_separable`)."""
     if obs.run_monotone:
-        return False, ("the levels were run in order of amplitude (a repeat run next "
-                       "to its level counts with it): a drift with time "
+        return False, ("the levels were run in order of amplitude: a drift with time "
                        "cannot be told from an amplitude effect")
     return True, None
