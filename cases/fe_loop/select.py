@@ -39,8 +39,8 @@ from inverse.estimate import estimate
 from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Parameter,
                             UpdateProblem, fit)
 
-__all__ = ["MICRO_LIMIT", "estimator_start", "base_parameters", "Headline", "fe_noise", "untestable",
-           "fit_base", "cold_failure", "fe_select", "chosen_model"]
+__all__ = ["MICRO_LIMIT", "estimator_start", "base_parameters", "Headline", "fe_noise",
+           "untestable", "fit_base", "cold_failure", "fe_select", "chosen_model"]
 
 #: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
 MICRO_LIMIT = 50.0
@@ -124,8 +124,6 @@ class Headline:
         return {"frequency_hz": pred.frequency_hz[h].tolist(), "zeta": pred.zeta[h].tolist(),
                 "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1]),
                 "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
-
-
 
 
 def _abscissa(data):

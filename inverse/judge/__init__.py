@@ -15,7 +15,8 @@ e.g. the log response amplitude, the same way on an absolute scale):
   parabolas in the log amplitude, one or two power laws of amplitude with exponents
   from a grid, a Muntz polynomial) the one with the least leave-one-out error (PRESS,
   Allen 1974), ``sigma^2 = RSS / (n - k)`` with a grid exponent counted as a parameter;
-  when the run order is not monotone in amplitude, a step between two runs or a drift
+  when the run order is not monotone in amplitude (:func:`time_separable`, the rule that
+  also decides whether a drift with time can be tested), a step between two runs or a drift
   with time is taken out where it lowers the leave-one-out error by
   :data:`~inverse.judge.noise.RUN_ORDER_GAIN` (a change with time is not repeatability).
   That term is found over the rows, so a level run again later differs by it, and it
@@ -87,8 +88,7 @@ from inverse.judge.selection import (P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Candid
 
 __all__ = ["P_UNEXPLAINED", "T_CAUSE", "W_AMBIGUOUS", "MIN_REPEAT_DOF", "FLOORS",
            "NoiseModel", "noise_model", "smooth_scatter", "pooled_repeats", "time_separable",
-           "FitTest",
-           "fit_test", "effective_dof", "drop_dof", "known_noise_equivalent",
+           "FitTest", "fit_test", "effective_dof", "drop_dof", "known_noise_equivalent",
            "drop_for_known_noise",
            "Candidate", "Selection", "select", "Bounded", "at_bound", "detection_bound",
            "naming_power", "RIG_REPEATABILITY", "RepeatabilityPrior", "prior_for"]

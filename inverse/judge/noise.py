@@ -11,8 +11,8 @@ from scipy.stats import chi2 as chi2_dist
 
 from inverse.judge.prior import RIG_REPEATABILITY, RepeatabilityPrior, pool
 
-__all__ = ["time_separable", "MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel", "noise_model", "smooth_scatter",
-           "pooled_repeats"]
+__all__ = ["time_separable", "MIN_REPEAT_DOF", "SCATTER_P", "FLOORS", "NoiseModel",
+           "noise_model", "smooth_scatter", "pooled_repeats"]
 
 #: Repeats with fewer degrees of freedom are pooled with the smooth-curve scatter.
 MIN_REPEAT_DOF = 6
