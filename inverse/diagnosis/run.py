@@ -124,11 +124,18 @@ def _inactive(fit, obs) -> str | None:
     return None
 
 
-def _fit_all(models, obs):
-    fits = {m.name: fit_model(m, obs) for m in models if len(m.causes) < 2}
+def _fit_all(models, obs, also_from=None):
+    """Every model fitted (grid search, then refinement); ``also_from``: fits of the
+    same models against another noise, whose optima are refined too (the best of all
+    starts is kept, so the fit is never worse than either search alone)."""
+    def more(m):
+        return [also_from[m.name].theta] if also_from and m.name in also_from else []
+    fits = {m.name: fit_model(m, obs, extra_starts=more(m) or None)
+            for m in models if len(m.causes) < 2}
     for m in models:
         if len(m.causes) == 2:
-            fits[m.name] = fit_model(m, obs, n_starts=5, extra_starts=_pair_starts(m, fits))
+            fits[m.name] = fit_model(m, obs, n_starts=5,
+                                     extra_starts=_pair_starts(m, fits) + more(m))
     return fits
 
 
@@ -207,10 +214,10 @@ def _judged(models, obs, noise, dm, mean_noise):
     return fits, params, found, refuted, cv, select(_candidates(fits, cv, obs, refuted), noise)
 
 
-def _identification_only(models, obs, noise, cv, refuted):
-    """The verdict with the identification's noise alone (every candidate refitted; the
-    held-out gains are those of the folds with the total noise) and its failed fits, or
-    (None, why, None)."""
+def _identification_only(models, obs, noise, cv, refuted, fits):
+    """The verdict with the identification's noise alone (every candidate refitted, also
+    from its optimum in ``fits``, the fits with the total noise; the held-out gains are
+    those of the folds with the total noise) and its failed fits, or (None, why, None)."""
     if not noise.has_identification():
         return None, "the table has no identification uncertainty (no std columns)", None
     if all(np.all(r == 0) for r in noise.repeatability.values()):
@@ -219,7 +226,7 @@ def _identification_only(models, obs, noise, cv, refuted):
     sig = obs.sigma
     obs.sigma = only.total
     try:
-        fits = _fit_all(models, obs)
+        fits = _fit_all(models, obs, also_from=fits)
         sel = select(_candidates(fits, cv, obs, refuted), only)
     finally:
         obs.sigma = sig
@@ -292,7 +299,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
                 f"identification of nonlinear FRFs; a response-controlled test would tell")
     if best != "none" and chi_at_bound(params[best], best) is not None:
         found.append(chi_at_bound(params[best], best))
-    sel_id, why_id, id_failed = _identification_only(models, obs, noise, cv, refuted)
+    sel_id, why_id, id_failed = _identification_only(models, obs, noise, cv, refuted, fits)
     sel_own, own_failed = _own_scatter(models, obs, d, stds, raw, noise)
     averaged = averaging_weights(sel)
     held = {k: held_out_top(fits[k], obs) for k in {"none", best} | set(averaged)}
