@@ -126,6 +126,16 @@ class MeasuredData:
         :attr:`response_abscissa`, else ``excitation``."""
         return self.response_amplitude if self.response_abscissa else self.excitation
 
+    @property
+    def resonant_amplitude(self) -> np.ndarray:
+        """The abscissa on which the diagnosis and its noise model order the levels:
+        the held response amplitude when :attr:`response_abscissa`, else
+        ``excitation / (zeta omega^2)``, proportional to the resonant modal amplitude
+        (paper eq. 31 at ``omega = omega_n``: ``|q| = phi^T f / (2 zeta omega_n^2)``)."""
+        if self.response_abscissa:
+            return np.asarray(self.response_amplitude, float)
+        return self.excitation / (self.zeta * self.omega2)
+
     def take(self, index) -> "MeasuredData":
         """Entries selected by an index or boolean mask (warnings are kept)."""
         index = np.asarray(index)

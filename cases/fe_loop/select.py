@@ -126,17 +126,10 @@ class Headline:
                 "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
 
 
-def _abscissa(data):
-    """The one-mode diagnosis's abscissa: the held response amplitude, else
-    ``excitation / (zeta omega^2)``."""
-    return np.asarray(data.response_amplitude, float) if data.response_abscissa else \
-        data.excitation / (data.zeta * data.omega2)
-
-
 def fe_noise(data, cap: bool = True):
     """(judge noise, :class:`inverse.update.NoiseModel` of its totals) of one mode's
     levels (module docstring); ``cap`` as in :func:`inverse.judge.noise_model`."""
-    jn = judge.noise_model(_abscissa(data), {"omega2": data.omega2, "zeta": data.zeta},
+    jn = judge.noise_model(data.resonant_amplitude, {"omega2": data.omega2, "zeta": data.zeta},
                            {"omega2": data.omega2_std, "zeta": data.zeta_std},
                            data.level, data.run_order,
                            prior=judge.prior_for(data.rig_repeatability), cap=cap)
@@ -150,7 +143,7 @@ def untestable(data) -> dict:
     """Causes the data cannot test at the FE level, with the reason (module docstring)."""
     out = {"nonproportional-amplitude": "the FE fit compares omega2 and zeta only; a force "
                                         "shortfall needs a response channel"}
-    if not judge.time_separable(data.level, data.run_order, _abscissa(data)):
+    if not judge.time_separable(data.level, data.run_order, data.resonant_amplitude):
         out["thermal-drift"] = ("the levels were run in order of amplitude: a drift with "
                                 "time cannot be told from an amplitude effect")
     return out

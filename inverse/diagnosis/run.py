@@ -74,15 +74,13 @@ def observations_from(data: MeasuredData, mode: int | None = None):
     if len(set(d.control)) > 1:
         raise ValueError(f"mode {mode} mixes force- and response-controlled levels")
     rc = d.response_abscissa
+    raw = d.resonant_amplitude
     if rc:
-        raw = np.asarray(d.response_amplitude, float)
         what = {"random": "random test: the response RMS (micro-slip laws hold on it "
                           "up to a constant factor, inverse.random_amplitude)",
                 "free-decay": "free decay: the envelope along the decay"}.get(
             str(d.test[0]), "response-controlled: the held response amplitude")
         warnings.append(f"{what} is the abscissa; nonproportional-amplitude does not apply")
-    else:
-        raw = d.excitation / (d.zeta * d.omega2)
     s = raw / raw.max()
     log_r = None
     if d.response_amplitude is not None and not rc:
