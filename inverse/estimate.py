@@ -43,7 +43,7 @@ from inverse.contradictions import iwan_contradictions
 from inverse.estimate_result import Estimate
 from inverse.fe_reference import fe_reference
 from inverse.iwan_modal import EQ45_FACTOR, delta_c_from_zeta, kappa1_per_R, kappa_ratio, r_tilde
-from inverse.level_predictions import predict_levels
+from inverse.level_predictions import predict_levels, unphysical
 from inverse.power_law import fit_damping_growth
 from inverse.random_amplitude import rayleigh_factor
 
@@ -313,6 +313,8 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
     # ------------------------------------------------------------ anchors, predictions
     predictions, omega2_lin, zeta_lin = predict_levels(fitres, d, in_fit, r, method, c_modal,
                                                        eq45_factor, confidence)
+    if bad := unphysical(predictions):
+        warnings.append(bad)
 
     chi_iv = fitres.interval(lambda p, k: p - 1.0, confidence)
     k1b_iv = fitres.interval(lambda p, k: math.exp(k) / p if p > 0 else math.nan, confidence, log=True)

@@ -65,7 +65,8 @@ def predict_levels(fitres: PowerLawFit, d, in_fit, r, method: str, c_modal: floa
         if method == "paper":
             ze = zeta_lin + dc / (eq45_factor * om2)
         else:
-            ze = zeta_with_joint(dc, om2, c_modal, eq45_factor)
+            with np.errstate(invalid="ignore"):   # omega^2 <= 0: nan, named by unphysical
+                ze = zeta_with_joint(dc, om2, c_modal, eq45_factor)
         return om2, ze
 
     om2_p, ze_p = absolute(fitres.p, fitres.ln_kt)
@@ -117,3 +118,18 @@ def predict_levels(fitres: PowerLawFit, d, in_fit, r, method: str, c_modal: floa
                        delta_zeta_error_percent=err(dze_p[j], m_dze))
         predictions.append(rec)
     return predictions, omega2_lin, zeta_lin
+
+
+def unphysical(predictions) -> str | None:
+    """One sentence naming the levels where the fitted law predicts ``omega^2 <= 0`` or
+    ``zeta <= 0`` (a growth law extrapolated past what it can describe), or None."""
+    def levels(key):
+        bad = [p["level"] for p in predictions if not p[key] > 0]   # nan counts as bad
+        return ", ".join(map(str, bad))
+
+    parts = [f"{name} <= 0 at level(s) {lv}" for name, lv in
+             (("omega^2", levels("omega2")), ("zeta", levels("zeta"))) if lv]
+    if not parts:
+        return None
+    return (f"the fitted law predicts {'; '.join(parts)}: no mode there, the fit does not "
+            "describe this series (eq. 43, 46)")

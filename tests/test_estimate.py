@@ -161,6 +161,32 @@ def test_exact_method_recovers_hidden_parameters_noise_free(seed):
         assert p["delta_zeta"] == pytest.approx(p["measured_delta_zeta"], rel=1e-5)
 
 
+def test_a_law_extrapolated_past_zero_stiffness_is_named():
+    """Levels 1-7 of a micro-slip law whose loss of omega^2 reaches omega_lin^2 at a
+    drawn amplitude between levels 8 and 10 (closed form); the untested levels keep a
+    positive frequency. The levels past the crossing are named, no other; the same law
+    stopped short of the crossing gets no such warning."""
+    rng = np.random.default_rng(77)
+    chi = rng.uniform(-0.3, -0.05)
+    exc = 0.01 * 2.0 ** np.arange(10)
+    r = exc / exc[0]
+    r_cross = r[7] * 4.0 ** rng.uniform(0.05, 0.95)         # between levels 8 and 10
+    q = q_exact(chi)
+    kB = 2.5e6 / (q * r_cross ** (chi + 1))                  # q kB r_cross^(chi+1) = w^2
+    fit = synthetic(chi, kB, exc[:7], q)
+    data = MeasuredData(level=np.arange(1, 11), excitation=exc,
+                        omega2=np.r_[fit.omega2, np.full(3, 0.9 * fit.omega2[-1])],
+                        zeta=np.r_[fit.zeta, np.full(3, fit.zeta[-1])],
+                        mode=np.ones(10, int), run_order=None)
+    est = estimate(data, "1-7", "exact")
+    named = [w for w in est.data_warnings if "the fitted law predicts" in w]
+    past = [str(v) for v in range(8, 11) if r[v - 1] >= r_cross]
+    assert len(named) == 1 and f"omega^2 <= 0 at level(s) {', '.join(past)}" in named[0]
+    assert all(p["omega2"] > 0 for p in est.predictions[:7])
+    clean = estimate(synthetic(chi, kB, exc[:7], q), "1-7", "exact")
+    assert not any("the fitted law predicts" in w for w in clean.data_warnings)
+
+
 def test_varying_excitation_ratios_recovered():
     """Eq. 34 generalized: arbitrary increasing excitations, exact recovery."""
     rng = np.random.default_rng(7)
