@@ -33,7 +33,8 @@ from functools import lru_cache
 import numpy as np
 
 from fe.aft import aft_joint_force
-from fe.newton_path import SteadyStateError, damped_newton, follow, natural_continuation
+from fe.newton_path import (SteadyStateError, damped_newton, follow, natural_continuation,
+                            stall_words)
 from fe.reduction import JointBank, ReducedModel
 
 __all__ = ["HBSettings", "HBSolution", "HBOperator", "check_joint_stiffness", "solve_hb",
@@ -78,8 +79,9 @@ class HBSolution:
     slip_amplitude : (n_joints,) half peak-to-peak slip over the period (m).
     iterations : Newton iterations; residual : final relative update.
     fallback : how the solution was reached when Newton from the first guess failed
-        (e.g. ``"load raised gradually from the stuck-joint solution"``; several joined
-        by ``"; "``), empty when it did not.
+        (e.g. ``"load raised gradually from the stuck-joint solution"``) or ended on a
+        step stalled at round-off (:func:`fe.newton_path.stall_words`); several joined
+        by ``"; "``, empty for an ordinary convergence.
     """
 
     omega: float
@@ -302,9 +304,9 @@ def solve_hb(model: ReducedModel, bank: JointBank, load, omega: float,
     scale = max(np.abs(op.y_lin).max(), 1e-300)
     where = f"{omega / (2 * np.pi):.6g} Hz"
     y0 = op.y_lin.copy() if guess is None else _to_real(np.asarray(guess), h).reshape(-1)
-    fallback = ""
     try:
         y, it, upd, _ = damped_newton(balance, y0, settings.tol, settings.max_iter, scale)
+        fallback = stall_words(upd, settings.tol)
     except SteadyStateError as exc:
         if guess is not None:
             raise SteadyStateError(where, exc.reason) from None

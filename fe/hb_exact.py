@@ -18,7 +18,7 @@ import numpy as np
 
 from fe.harmonic_balance import (HBOperator, HBSolution, check_joint_stiffness,
                                  natural_continuation)
-from fe.newton_path import SteadyStateError, damped_newton
+from fe.newton_path import SteadyStateError, damped_newton, stall_words
 from fe.reduction import ReducedModel
 from joints.describing import ExactIwanJoints, as_joint_law, iwan_describing
 from joints.law import describing_force
@@ -105,7 +105,7 @@ def solve_hb_exact(model: ReducedModel, joints, load, omega: float, tol: float =
     q = op.Xp[0] - op.XG[0] @ N
     return HBSolution(omega=float(omega), harmonics=np.array([1]), slip=S[None, :],
                       joint_force=N[None, :], q=q[None, :], slip_amplitude=A,
-                      iterations=it, residual=float(upd))
+                      iterations=it, residual=float(upd), fallback=stall_words(upd, tol))
 
 
 def continuation_exact(model: ReducedModel, joints, load, omegas, tol: float = 1e-13,

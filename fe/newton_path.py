@@ -33,7 +33,8 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["SteadyStateError", "damped_newton", "follow", "natural_continuation"]
+__all__ = ["SteadyStateError", "damped_newton", "stall_words", "follow",
+           "natural_continuation"]
 
 #: Armijo constant ``c`` of the sufficient-decrease rule.
 ARMIJO = 1e-4
@@ -146,6 +147,16 @@ def damped_newton(evaluate: Callable, y0: np.ndarray, tol: float, max_iter: int,
         return y, max_iter, upd, n_eval
     raise SteadyStateError("", f"no convergence in {max_iter} iterations (relative update "
                                f"{upd:.2e})")
+
+
+def stall_words(relative_update: float, tol: float) -> str:
+    """How :func:`damped_newton` ended, for a solution's ``fallback``: empty when the
+    last full step was below ``tol``, else the step stalled at round-off (accepted by the
+    ``STALL_FACTOR`` rule, module docstring) with its size."""
+    if relative_update < tol:
+        return ""
+    return (f"Newton step stalled at round-off (relative update {relative_update:.1e}, "
+            f"tolerance {tol:.0e})")
 
 
 def follow(solve: Callable, history: list, p1: float, predictor: Callable,

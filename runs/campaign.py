@@ -144,7 +144,9 @@ class Campaign:
 class LevelResult:
     """One force level: receptance (n_lines, n_out) complex (m/N), first-harmonic slips
     (n_lines, n_joints) complex (m), half peak-to-peak slips (n_lines, n_joints) (m),
-    work per line (Newton iterations or periods), wall time (s)."""
+    work per line (Newton iterations or periods), wall time (s), and per line how the
+    steady state was reached when not by an ordinary Newton convergence (``fallbacks``,
+    :attr:`fe.harmonic_balance.HBSolution.fallback`; empty strings otherwise)."""
 
     force: float
     receptance: np.ndarray
@@ -152,18 +154,20 @@ class LevelResult:
     slip_amplitude: np.ndarray
     work: np.ndarray
     elapsed: float
+    fallbacks: np.ndarray
 
     def to_npz(self, path: Path) -> None:
         tmp = path.with_suffix(".tmp.npz")
         np.savez(tmp, force=self.force, receptance=self.receptance, slip=self.slip,
-                 slip_amplitude=self.slip_amplitude, work=self.work, elapsed=self.elapsed)
+                 slip_amplitude=self.slip_amplitude, work=self.work, elapsed=self.elapsed,
+                 fallbacks=self.fallbacks)
         os.replace(tmp, path)
 
     @classmethod
     def from_npz(cls, path: Path) -> "LevelResult":
         with np.load(path) as d:
             return cls(float(d["force"]), d["receptance"], d["slip"], d["slip_amplitude"],
-                       d["work"], float(d["elapsed"]))
+                       d["work"], float(d["elapsed"]), d["fallbacks"])
 
 
 @dataclass
@@ -171,7 +175,8 @@ class CampaignResult:
     """All levels: ``receptance`` (n_levels, n_lines, n_out), ``slip`` and
     ``slip_amplitude`` (n_levels, n_lines, n_joints), ``work`` (n_levels, n_lines),
     ``elapsed`` (n_levels,) seconds, ``computed`` (n_levels,) False for levels loaded
-    from the store, and the campaign ``hash``."""
+    from the store, the campaign ``hash`` and ``fallbacks`` (n_levels, n_lines) str
+    (:class:`LevelResult`)."""
 
     frequency_hz: np.ndarray
     force: np.ndarray
@@ -183,3 +188,16 @@ class CampaignResult:
     computed: np.ndarray
     hash: str
     protocol: str
+    fallbacks: np.ndarray
+
+    def fallback_lines(self) -> list[str]:
+        """One line per level whose steady states needed a fallback: the level, how many
+        lines, the first line's frequency and how it was reached."""
+        out = []
+        for i, row in enumerate(self.fallbacks):
+            hit = np.flatnonzero(row != "")
+            if hit.size:
+                out.append(f"level {i + 1} (F = {self.force[i]:.4g} N): {hit.size} of "
+                           f"{row.size} lines, first at {self.frequency_hz[hit[0]]:.6g} Hz: "
+                           f"{row[hit[0]]}")
+        return out

@@ -32,7 +32,7 @@ import numpy as np
 
 from fe.harmonic_balance import HBOperator, HBSettings, HBSolution, natural_continuation
 from fe.joint_harmonics import joint_path
-from fe.newton_path import SteadyStateError, damped_newton
+from fe.newton_path import SteadyStateError, damped_newton, stall_words
 from fe.reduction import ReducedModel
 from joints.iwan import IwanParameters
 
@@ -131,7 +131,7 @@ def solve_response_controlled(model: ReducedModel, joints, load, omega: float, c
     q[i1] += F * op.Xp[i1]
     return ControlledSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Nh, q=q,
                               slip_amplitude=amp, iterations=it, residual=float(upd),
-                              force=float(F))
+                              fallback=stall_words(upd, tol), force=float(F))
 
 
 @dataclass(frozen=True)
@@ -166,7 +166,7 @@ class ResponseControlProtocol:
     def run_level(self, model: ReducedModel, bank, campaign, amplitude: float, tick=None):
         """One level at held ``amplitude`` (m) over the campaign's lines: the level runner
         of :func:`runs.stepped_sine.run_level` (receptance, first-harmonic slips, slip
-        amplitudes, Newton iterations per line)."""
+        amplitudes, Newton iterations and fallbacks per line)."""
         joints = self.joint_harmonics(bank)
         load = model.load(campaign.load)
         control = np.asarray(model.basis[int(self.dof)], dtype=float)
@@ -179,7 +179,7 @@ class ResponseControlProtocol:
         slip = np.array([x.slip[x.harmonics == 1][0] for x in sols])
         amp = np.array([x.slip_amplitude for x in sols])
         work = np.array([x.iterations for x in sols], dtype=float)
-        return rec, slip, amp, work
+        return rec, slip, amp, work, [x.fallback for x in sols]
 
 
 def line_forces(result, campaign) -> np.ndarray:

@@ -36,7 +36,7 @@ from runs.store import open_manifest, write_manifest
 
 __all__ = ["campaign_hash", "run_level", "run_campaign"]
 
-FORMAT = "iwanfe-stepped-sine/1"
+FORMAT = "iwanfe-stepped-sine/2"   # 2: fallbacks per line
 
 
 # --------------------------------------------------------------------------- hashing
@@ -76,7 +76,7 @@ def _hb_level(model, bank, campaign, F, tick):
     slip = np.array([s.slip[s.harmonics == 1][0] for s in sols])
     amp = np.array([s.slip_amplitude for s in sols])
     work = np.array([s.iterations for s in sols], dtype=float)
-    return rec, slip, amp, work
+    return rec, slip, amp, work, [s.fallback for s in sols]
 
 
 def _first_harmonic(y, theta):
@@ -158,7 +158,7 @@ def _newmark_level(model, bank, campaign, F, tick):
         phase = float(np.mod(theta[-1], 2 * np.pi))
         if tick is not None:
             tick.update(1)
-    return rec, slip, amp, work
+    return rec, slip, amp, work, None
 
 
 def _period_newton(model, orbit, dt, n_steps):
@@ -206,7 +206,7 @@ def _paper_level(model, bank, campaign, F, tick):
         work[li] = (n_settle + n_window) / N
         if tick is not None:
             tick.update(1)
-    return rec, slip, amp, work
+    return rec, slip, amp, work, None
 
 
 _LEVEL_RUNNERS = {"hb": _hb_level, "newmark": _newmark_level, "paper": _paper_level}
@@ -221,10 +221,12 @@ def run_level(model: ReducedModel, bank: JointBank, campaign: Campaign, level: i
     runner = getattr(campaign.protocol, "run_level", None) or _LEVEL_RUNNERS[campaign.protocol.name]
     try:
         with interrupt.deferred():   # Ctrl-C between lines only, never inside compiled code
-            rec, slip, amp, work = runner(model, bank, campaign, F, interrupt.Ticker(tick))
+            rec, slip, amp, work, fallbacks = runner(model, bank, campaign, F,
+                                                     interrupt.Ticker(tick))
     except SteadyStateError as exc:
         raise exc.within(f"level {level + 1} of {campaign.force.size} (F = {F:.4g} N)") from None
-    return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0)
+    fallbacks = np.asarray([""] * len(work) if fallbacks is None else fallbacks, dtype=str)
+    return LevelResult(F, rec, slip, amp, work, time.perf_counter() - t0, fallbacks)
 
 
 def _level_task(level: int, shared) -> LevelResult:
@@ -349,6 +351,7 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
         slip=np.array([results[i].slip for i in order]),
         slip_amplitude=np.array([results[i].slip_amplitude for i in order]),
         work=np.array([results[i].work for i in order]),
+        fallbacks=np.array([results[i].fallbacks for i in order]),
         elapsed=np.array([results[i].elapsed for i in order]),
         computed=np.array([i not in loaded for i in order]),
         hash=digest, protocol=campaign.protocol.name)

@@ -89,3 +89,36 @@ def test_campaign_input_checks(lumped):
         Campaign([0.0, 10.0], [1.0], force_vector(p), [0])
     with pytest.raises(ValueError):
         Campaign([10.0], [-1.0], force_vector(p), [0])
+
+
+def test_a_fallback_is_recorded_per_line_and_kept_by_the_store(lumped, tmp_path,
+                                                                monkeypatch):
+    """Newton from the secant prediction refused at one drawn line (a stand-in for a
+    failed corrector): that line, and no other, records how it was reached
+    (fe.newton_path._recover); the store keeps it and the report line names it."""
+    import fe.harmonic_balance as hb
+    from fe.newton_path import SteadyStateError
+
+    p, s, m, bank = lumped
+    camp = Campaign(np.arange(59.0, 64.01, 0.5), [2.0, 16.0], force_vector(p), [4, 5])
+    line = int(np.random.default_rng(11).integers(1, camp.frequency_hz.size))
+    newton, calls = hb.damped_newton, [0]
+
+    def refuse_once(*args, **kwargs):
+        calls[0] += 1
+        if calls[0] == line + 1:             # serial: level 1, one call per line
+            raise SteadyStateError("", "refused by the test")
+        return newton(*args, **kwargs)
+
+    monkeypatch.setattr(hb, "damped_newton", refuse_once)
+    res = run_campaign(m, bank, camp, store=tmp_path / "s", progress=False)
+    hit = np.argwhere(res.fallbacks != "")
+    assert hit.tolist() == [[0, line]]
+    assert res.fallbacks[0, line] == "previous line as the guess (refused by the test)"
+    assert res.fallback_lines() == [
+        f"level 1 (F = 2 N): 1 of 11 lines, first at {camp.frequency_hz[line]:g} Hz: "
+        "previous line as the guess (refused by the test)"]
+    monkeypatch.setattr(hb, "damped_newton", newton)
+    again = run_campaign(m, bank, camp, store=tmp_path / "s", progress=False)
+    assert not again.computed.any()
+    np.testing.assert_array_equal(again.fallbacks, res.fallbacks)

@@ -244,7 +244,8 @@ class DoubleBeamReport:
                          "levels_computed": int(camp.computed.sum()),
                          "elapsed_s": camp.elapsed,
                          ("newton_iterations_mean" if self.protocol == "hb"
-                          else "periods_per_line_mean"): camp.work.mean(axis=1)},
+                          else "periods_per_line_mean"): camp.work.mean(axis=1),
+                         "fallbacks": camp.fallback_lines()},
             "calibration": self.calibration,
             "protocol_comparison": self.protocol_comparison,
             "timings_s": self.timings,

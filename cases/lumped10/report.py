@@ -130,6 +130,7 @@ class LumpedReport:
                                                        / self.topology.joint_slip[m - 1, 1]))
                                      for m in self.modes},
             },
+            "campaign_fallbacks": self.campaign.fallback_lines(),
             "timings_s": self.timings,
         }
         for k in keys:
