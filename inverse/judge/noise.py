@@ -132,16 +132,25 @@ def _run_order_terms(t):
         yield 2, [np.exp(-(t - t.min()) / tau)], "a drift"
 
 
-def _press(cols, y):
-    """(leave-one-out error, RSS) of ``y`` about its least-squares fit on ``cols``
-    (None when the columns are rank-deficient)."""
-    q, r = np.linalg.qr(np.column_stack(cols))
-    d = np.abs(np.diag(r))
-    if d.min() < 1e-10 * d.max():
-        return None
-    e = y - q @ (q.T @ y)
-    h = np.sum(q**2, axis=1)
-    return float(np.sum((e / np.maximum(1.0 - h, 1e-9)) ** 2)), float(e @ e)
+def _press(col_sets, y):
+    """(leave-one-out error, RSS) of ``y`` about its least-squares fit on each set of
+    columns in ``col_sets`` (None where the columns are rank-deficient), in order: the
+    sets with as many columns are factored together (one batched QR)."""
+    out = [None] * len(col_sets)
+    by_k = {}
+    for i, cols in enumerate(col_sets):
+        by_k.setdefault(len(cols), []).append(i)
+    for idx in by_k.values():
+        q, r = np.linalg.qr(np.stack([np.column_stack(col_sets[i]) for i in idx]))
+        d = np.abs(np.diagonal(r, axis1=1, axis2=2))
+        e = y - np.einsum("bnk,bk->bn", q, np.einsum("bnk,n->bk", q, y))
+        h = np.sum(q**2, axis=2)
+        press = np.sum((e / np.maximum(1.0 - h, 1e-9)) ** 2, axis=1)
+        rss = np.sum(e**2, axis=1)
+        for j, i in enumerate(idx):
+            if d[j].min() >= 1e-10 * d[j].max():
+                out[i] = (float(press[j]), float(rss[j]))
+    return out
 
 
 def _scatter(x, y, t=None, reserved: int = 0):
@@ -157,21 +166,23 @@ def _scatter(x, y, t=None, reserved: int = 0):
     # leave-one-out errors at round-off are ties (which exact fit comes first would
     # depend on the CPU): floored there, the fewest parameters win
     tiny = x.size * (ROUNDOFF * float(np.max(np.abs(y)))) ** 2
-    fits = []
-    for k, cols in _curves(x):
-        if n - k >= 1 and (f := _press(cols, y)) is not None:
-            fits.append((max(f[0], tiny), f[1], k, cols))
+    curves = [(k, cols) for k, cols in _curves(x) if n - k >= 1]
+    fits = [(max(f[0], tiny), f[1], k, cols)
+            for (k, cols), f in zip(curves, _press([c for _, c in curves], y)) if f is not None]
     fits.sort(key=lambda f: (f[0], f[2]))
     best = (*fits[0][:3], None, none, 0)
-    for _, _, k, cols in (fits[:_N_TRIED] if t is not None else []):
-        for kt, extra, words in _run_order_terms(t):
-            if n - k - kt < 1 or (f := _press(cols + extra, y)) is None:
-                continue
-            f = (max(f[0], tiny), f[1])
-            if f[0] < min(RUN_ORDER_GAIN * fits[0][0], best[0]):
-                a = np.column_stack(cols + extra)
-                coef = np.linalg.lstsq(a, y, rcond=None)[0]
-                best = (f[0], f[1], k + kt, words, a[:, len(cols):] @ coef[len(cols):], kt)
+    tried = [(k, cols, kt, extra, words)
+             for _, _, k, cols in (fits[:_N_TRIED] if t is not None else [])
+             for kt, extra, words in _run_order_terms(t) if n - k - kt >= 1]
+    for (k, cols, kt, extra, words), f in zip(
+            tried, _press([cols + extra for k, cols, kt, extra, words in tried], y)):
+        if f is None:
+            continue
+        f = (max(f[0], tiny), f[1])
+        if f[0] < min(RUN_ORDER_GAIN * fits[0][0], best[0]):
+            a = np.column_stack(cols + extra)
+            coef = np.linalg.lstsq(a, y, rcond=None)[0]
+            best = (f[0], f[1], k + kt, words, a[:, len(cols):] @ coef[len(cols):], kt)
     _, rss, k, term, part, kt = best
     return math.sqrt(rss / (n - k)), n - k, term, part, kt
 
