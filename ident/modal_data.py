@@ -136,6 +136,22 @@ class MeasuredData:
             return np.asarray(self.response_amplitude, float)
         return self.excitation / (self.zeta * self.omega2)
 
+    @property
+    def identified_at_peak(self) -> np.ndarray | None:
+        """Rows identified at their level's peak amplitude (a finite ``x_omega2_slope``,
+        :mod:`ident.amplitude_poles`, ``--amplitude-refit``), or None without that
+        column."""
+        col = self.extra.get("x_omega2_slope")
+        if col is None:
+            return None
+
+        def finite(v):
+            try:
+                return bool(np.isfinite(float(v)))
+            except ValueError:
+                return False
+        return np.array([finite(v) for v in col])
+
     def take(self, index) -> "MeasuredData":
         """Entries selected by an index or boolean mask (warnings are kept)."""
         index = np.asarray(index)

@@ -155,21 +155,6 @@ def _candidates(fits, cv, obs, refuted):
     return out
 
 
-def _at_peak(d):
-    """Rows identified at their level's peak amplitude (a finite ``x_omega2_slope``,
-    :mod:`ident.amplitude_poles`), or None without that column."""
-    col = d.extra.get("x_omega2_slope")
-    if col is None:
-        return None
-
-    def finite(v):
-        try:
-            return bool(np.isfinite(float(v)))
-        except ValueError:
-            return False
-    return np.array([finite(v) for v in col])
-
-
 def level_means_and_noise(obs, d, stds, raw, cap: bool = True):
     """The judge's noise model of one mode (identification plus repeatability,
     :func:`inverse.diagnosis.noise.one_mode_noise`; sets ``obs.sigma``), the level means
@@ -178,7 +163,7 @@ def level_means_and_noise(obs, d, stds, raw, cap: bool = True):
     ``cap`` as in :func:`inverse.judge.noise_model`.
 
     Returns (noise model, level means, :class:`inverse.contradictions.NoiseLevels`)."""
-    noise = one_mode_noise(obs, stds, raw, d.run_order, _at_peak(d),
+    noise = one_mode_noise(obs, stds, raw, d.run_order, d.identified_at_peak,
                            prior_for(d.rig_repeatability), cap=cap)
     obs.sigma = noise.total
     dm, _ = mean_per_level(d)
@@ -267,7 +252,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     """
     obs, d, stds, raw, warnings = observations_from(data, mode)
     noise, dm, mean_noise = level_means_and_noise(obs, d, stds, raw)
-    peak = _at_peak(d)
+    peak = d.identified_at_peak
     if peak is not None and peak.any():
         warnings.append(f"levels {', '.join(map(str, np.unique(d.level[peak])))} were "
                         "identified at their peak amplitude (--amplitude-refit): their "
