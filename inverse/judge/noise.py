@@ -143,13 +143,12 @@ def _press(col_sets, y):
     for idx in by_k.values():
         q, r = np.linalg.qr(np.stack([np.column_stack(col_sets[i]) for i in idx]))
         d = np.abs(np.diagonal(r, axis1=1, axis2=2))
-        e = y - np.einsum("bnk,bk->bn", q, np.einsum("bnk,n->bk", q, y))
+        e = y - (q @ (np.swapaxes(q, 1, 2) @ y[:, None]))[..., 0]
         h = np.sum(q**2, axis=2)
-        press = np.sum((e / np.maximum(1.0 - h, 1e-9)) ** 2, axis=1)
-        rss = np.sum(e**2, axis=1)
-        for j, i in enumerate(idx):
+        for j, i in enumerate(idx):     # the sums row by row: the same bits as one fit
             if d[j].min() >= 1e-10 * d[j].max():
-                out[i] = (float(press[j]), float(rss[j]))
+                out[i] = (float(np.sum((e[j] / np.maximum(1.0 - h[j], 1e-9)) ** 2)),
+                          float(e[j] @ e[j]))
     return out
 
 
