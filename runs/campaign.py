@@ -201,3 +201,7 @@ class CampaignResult:
                            f"{row.size} lines, first at {self.frequency_hz[hit[0]]:.6g} Hz: "
                            f"{row[hit[0]]}")
         return out
+
+    def fallback_summary(self) -> str:
+        """:meth:`fallback_lines` on one line, ``"none"`` without any."""
+        return "; ".join(self.fallback_lines()) or "none"

@@ -233,7 +233,7 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
                f"{'Newton iterations' if rep.protocol == 'hb' else 'periods'} per line "
                f"{camp.work.mean():.2f}, {t['campaign']:.1f} s")
     out.append("- steady states reached by a fallback (fe.newton_path): "
-               + ("; ".join(camp.fallback_lines()) or "none"))
+               + camp.fallback_summary())
     out.append(f"- setup {t['setup']:.1f} s, identification {t['identification']:.1f} s, "
                f"estimation {t['estimation']:.1f} s" + (f", total wall time {wall_time:.1f} s"
                                                         if wall_time is not None else ""))

@@ -122,8 +122,7 @@ def _lumped_text(rep, files) -> str:
                  f"{rep.campaign.force.size} levels, protocol {rep.protocol}, "
                  f"{rep.timings['campaign']:.1f} s ({rep.timings['campaign_levels_computed']} "
                  f"levels computed, the rest loaded from the store)")
-    lines.append("Steady states reached by a fallback: "
-                 + ("; ".join(rep.campaign.fallback_lines()) or "none"))
+    lines.append(f"Steady states reached by a fallback: {rep.campaign.fallback_summary()}")
     lines.append("")
     lines.append("Table 1: joint slip amplitudes (m) at the identified resonance, ours | paper")
     for k, t in d["table1"].items():
@@ -299,8 +298,7 @@ def _double_beam_text(rep, files, wall) -> str:
     lines.append(f"Wall time {wall:.1f} s (campaign {rep.timings['campaign']:.1f} s, "
                  f"{int(rep.campaign.computed.sum())} of {rep.campaign.force.size} levels "
                  f"computed; weak-joint reruns {rep.timings.get('weak_joint_runs', 0.0):.1f} s)")
-    lines.append("Steady states reached by a fallback: "
-                 + ("; ".join(rep.campaign.fallback_lines()) or "none"))
+    lines.append(f"Steady states reached by a fallback: {rep.campaign.fallback_summary()}")
     return "\n".join(lines)
 
 
