@@ -33,7 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fe.newton_path import ARMIJO, MIN_DAMPING, ROUNDOFF, SteadyStateError
+from fe.newton_path import (ARMIJO, MIN_DAMPING, ROUNDOFF, STALL_FACTOR, SteadyStateError,
+                            stall_words)
 from fe.reduction import ReducedModel
 from joints.describing import as_joint_law
 from joints.law import describing_force
@@ -81,7 +82,9 @@ class ResonanceLevels:
     harmonics ``slip`` (L, n_joints) complex and amplitudes ``slip_amplitude`` (m), the
     element amplitudes ``element_amplitude`` (L, n_e) and harmonics
     ``element_harmonics``, reduced response ``q`` (L, r), secant steps and Newton
-    iterations (total)."""
+    iterations (total), and per level how its steady state was reached when not by an
+    ordinary Newton convergence (``fallbacks``, empty strings otherwise; a last Newton
+    step accepted at round-off, :func:`fe.newton_path.stall_words`)."""
 
     omega: np.ndarray
     omega2: np.ndarray
@@ -93,6 +96,7 @@ class ResonanceLevels:
     secant_steps: int
     newton_iterations: int
     element_harmonics: np.ndarray | None = None
+    fallbacks: list | None = None
 
 
 class _Balance:
@@ -163,7 +167,9 @@ class _Balance:
     def solve(self, omega, Y, tol, max_iter):
         """Newton on (1) at ``omega`` (L,) from ``Y`` (L, ny), globalized level by level
         with the line search of :func:`fe.newton_path.damped_newton` (deep macro-slip
-        from a linear guess); returns Y, N, Dinv, iterations. Raises
+        from a linear guess); returns Y, N, Dinv, iterations and the relative update of
+        each level's last Newton step (L,) (at or above ``tol`` where accepted at
+        round-off, :data:`fe.newton_path.STALL_FACTOR`). Raises
         :class:`fe.newton_path.SteadyStateError` where a level's line search stalls."""
         R, Ylin, Dinv = self.operator(omega)
         ny = self.ny
@@ -203,10 +209,10 @@ class _Balance:
                 lam = np.where(bad, 0.5 * lam, lam)
             Y, res, N, dx, dy, size = Yt, rt, Nt, dxt, dyt, st
             upd = np.abs(step).max(axis=1) / np.maximum(np.abs(Y).max(axis=1), 1e-12 * scale)
-            # converged: the full Newton step is negligible, or within 100 tol and no
-            # step along it lowers the residual any more (round-off floor)
-            if np.all((upd < tol) | ((upd < 100.0 * tol) & ((lam < 1.0) | floor))):
-                return Y, N, Dinv, it
+            # converged: the full Newton step is negligible, or within STALL_FACTOR tol
+            # and no step along it lowers the residual any more (round-off floor)
+            if np.all((upd < tol) | ((upd < STALL_FACTOR * tol) & ((lam < 1.0) | floor))):
+                return Y, N, Dinv, it, upd
         raise RuntimeError(f"first-harmonic balance did not converge at "
                            f"{np.asarray(omega).max() / (2 * np.pi):.4g} Hz (relative update "
                            f"{upd.max():.2e} after {max_iter} iterations)")
@@ -257,7 +263,7 @@ def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
     else:
         w0 = np.sqrt(b.a * b.k[k])
         Y0 = b.operator(w0)[1]
-    Y, N, Dinv, its = b.solve(w0, Y0, tol, max_newton)
+    Y, N, Dinv, its, _ = b.solve(w0, Y0, tol, max_newton)
 
     def re_dk(N, Dinv):
         """``Re D_k`` (rad^2/s^2); ``~ omega_eff^2 - w^2`` near the resonance."""
@@ -267,7 +273,7 @@ def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
     # first step: w^2 + Re D_k (exact for a linear single mode), then secant steps
     w1 = np.sqrt(np.maximum(w0 ** 2 + g0, (0.9 * w0) ** 2))
     w1 = np.where(w1 == w0, w0 * (1.0 - 1e-7), w1)
-    Y1, N, Dinv, it = b.solve(w1, Y, tol, max_newton)
+    Y1, N, Dinv, it, upd = b.solve(w1, Y, tol, max_newton)
     its += it
     g1 = re_dk(N, Dinv)
     steps = 1
@@ -277,7 +283,7 @@ def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
         step = np.clip(secant, -0.05 * w1, 0.05 * w1)
         w0, g0, Y = w1, g1, Y1
         w1 = w1 + step
-        Y1, N, Dinv, it = b.solve(w1, Y, tol, max_newton)
+        Y1, N, Dinv, it, upd = b.solve(w1, Y, tol, max_newton)
         its += it
         g1 = re_dk(N, Dinv)
         if np.all(np.abs(step) <= tol * w1):
@@ -290,7 +296,8 @@ def resonance_levels(model: ReducedModel, joints, load, forces, mode_index: int,
     return ResonanceLevels(omega=w1, omega2=w1 ** 2, zeta=Dk.imag / (2.0 * w1 ** 2),
                            slip=Y1[:, :b.nj], slip_amplitude=A[:, :b.nj],
                            element_amplitude=A[:, b.nj:], q=q, secant_steps=steps,
-                           newton_iterations=its, element_harmonics=Y1[:, b.nj:])
+                           newton_iterations=its, element_harmonics=Y1[:, b.nj:],
+                           fallbacks=[stall_words(u, tol) for u in upd])
 
 
 def frf_levels(model: ReducedModel, joints, load, forces, omegas, scale=None,
@@ -312,7 +319,7 @@ def frf_levels(model: ReducedModel, joints, load, forces, omegas, scale=None,
     for i, w in enumerate(omegas):
         wl = np.full(b.L, w)
         Y = b.operator(wl)[1] if Y is None else Y
-        Y, N, Dinv, _ = b.solve(wl, Y, tol, max_newton)
+        Y, N, Dinv = b.solve(wl, Y, tol, max_newton)[:3]
         q[:, i] = b.response(N, Dinv)
         amp[:, i] = np.abs(Y[:, :b.nj])
     return q, amp

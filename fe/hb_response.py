@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fe.hb_resonance import ResonanceLevels, _Balance, resonance_levels
+from fe.newton_path import stall_words
 from fe.reduction import ReducedModel
 
 __all__ = ["ResponseLevels", "response_levels"]
@@ -41,19 +42,20 @@ MAX_HALVINGS = 6
 #: The per-level fields of a result (the fallback fills its levels in).
 PER_LEVEL = ("omega", "omega2", "zeta", "slip", "slip_amplitude", "element_amplitude", "q",
              "element_harmonics", "force", "response")
+#: How a level reached by the bracketed fallback says so (its ``fallbacks`` entry).
+BRACKETED = "bracketed secant on ln F (Newton on (ln w, ln F) did not hold the amplitude)"
 
 
 @dataclass
 class ResponseLevels(ResonanceLevels):
     """:class:`fe.hb_resonance.ResonanceLevels` plus the force amplitude that holds each
-    level's response (``force``, N), the held DOF's first harmonic (``response``) and
-    whether the Newton iteration gave way to the bracketed fallback at some level
-    (``fallback``); the last Jacobian of the Newton iteration (``jacobian``, (L, 2, 2))
-    starts the next call."""
+    level's response (``force``, N) and the held DOF's first harmonic (``response``);
+    a level where the Newton iteration gave way to the bracketed fallback says so in its
+    ``fallbacks`` entry (:data:`BRACKETED`); the last Jacobian of the Newton iteration
+    (``jacobian``, (L, 2, 2)) starts the next call."""
 
     force: np.ndarray | None = None
     response: np.ndarray | None = None
-    fallback: bool = False
     jacobian: np.ndarray | None = None
 
 
@@ -102,19 +104,21 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
         start = resonance_levels(model, joints, load, F, k, scale=scale, elements=elements)
         w, lnF, F0 = start.omega, np.log(F), F
         Y = np.concatenate([start.slip, start.element_harmonics], axis=1)
-    its = 0
+    its, upd = 0, None
 
     def state(w, lnF, Y):
-        """Harmonics and the two equations (phase, amplitude) at ``(w, ln F)``."""
-        nonlocal its
+        """Harmonics and the two equations (phase, amplitude) at ``(w, ln F)``; the
+        last Newton step's relative update per level in ``upd``."""
+        nonlocal its, upd
         b.F = np.exp(lnF)
-        Y, N, Dinv, it = b.solve(w, Y, 0.01 * tol, max_newton)
+        Y, N, Dinv, it, upd = b.solve(w, Y, 0.01 * tol, max_newton)
         its += it
         q = b.response(N, Dinv)
         eq = np.stack([(b.p[k] * b.F / q[:, k]).real / w ** 2, np.log(np.abs(q @ c) / A)], 1)
         return Y, q, eq
 
     Y, q, eq = state(w, lnF, Y)
+    upd_at = upd
     miss0 = eq[:, 1].copy()
     J = guess.jacobian if warm and guess.jacobian is not None else None
     last = np.inf
@@ -136,6 +140,7 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
         for _ in range(MAX_HALVINGS):       # halve the step where |eq| does not fall
             Yt, qt, et = state(w * np.exp(lam * d[:, 0]), lnF + lam * d[:, 1],
                                Y * np.exp(lam * d[:, 1])[:, None])
+            upd_at = upd
             bad = (np.linalg.norm(et, axis=1) > (1.0 - 1e-4 * lam) * norm) & (norm > tol)
             if not bad.any():
                 break
@@ -149,7 +154,8 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
                          slip=Y[:, :b.nj], slip_amplitude=Ya[:, :b.nj],
                          element_amplitude=Ya[:, b.nj:], q=q, secant_steps=steps,
                          newton_iterations=its, element_harmonics=Y[:, b.nj:],
-                         force=F, response=q @ c, jacobian=J)
+                         force=F, response=q @ c, jacobian=J,
+                         fallbacks=[stall_words(u, 0.01 * tol) for u in upd_at])
     if not done.all():     # deep macro slip: the bracketed secant on ln F there
         i = np.flatnonzero(~done)
         # start from the force of the Newton iterate or of the start, whichever held
@@ -158,10 +164,12 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
         sub = _bracketed(model, joints, load, A[i], c, k, b.a[i], elements, tol, start)
         for name in PER_LEVEL:
             getattr(out, name)[i] = getattr(sub, name)
-        out.fallback = True
+        for j, words in zip(i, sub.fallbacks):
+            out.fallbacks[j] = words
         out.secant_steps += sub.secant_steps
         out.newton_iterations += sub.newton_iterations
     return out
+
 
 def _bracketed(model, joints, load, A, c, k, scale, elements, tol, F, max_steps=60):
     """The fallback of :func:`response_levels`: phase resonance at a force
@@ -196,7 +204,8 @@ def _bracketed(model, joints, load, A, c, k, scale, elements, tol, F, max_steps=
     else:
         raise RuntimeError(f"response-controlled phase resonance not found (worst |x|/A - 1 "
                            f"= {np.abs(np.expm1(miss)).max():.2e})")
-    out = ResponseLevels(**{f: getattr(res, f) for f in res.__dataclass_fields__},
-                         force=F, response=res.q @ c, fallback=True)
+    fields = {f: getattr(res, f) for f in res.__dataclass_fields__}
+    fields["fallbacks"] = ["; ".join(x for x in (BRACKETED, w) if x) for w in res.fallbacks]
+    out = ResponseLevels(**fields, force=F, response=res.q @ c)
     out.secant_steps, out.newton_iterations = steps, its
     return out

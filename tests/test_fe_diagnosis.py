@@ -63,7 +63,8 @@ def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
     r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
                      levels=DoubleBeamLevels.from_data)["fe"]
     assert r["cause"] == "none" and r["fit_test"]["p_value"] > 1e-3
-    assert r["failures"] == {"simulations": 0, "folds": 0, "fits": 0, "profile_points": 0}
+    assert r["failures"] == {"simulations": 0, "folds": 0, "fits": 0, "profile_points": 0,
+                             "fallbacks": {"base": [], "extended": []}}
     assert r["verdict_own_scatter"] is None          # nothing capped: no second verdict
     assert r["estimator_start"] == "used"
 

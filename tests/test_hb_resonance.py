@@ -156,3 +156,36 @@ def test_agrees_with_the_jenkins_bank_path(beam):
     soft = w_k2 - res.omega2[6]
     assert abs(om2_7h - res.omega2[6]) <= 0.03 * soft
     assert abs(ze_7h - res.zeta[6]) <= 0.01 * (res.zeta[6] - setup.zeta_viscous)
+
+
+def test_a_round_off_acceptance_is_recorded_at_its_level_only(monkeypatch):
+    """Round-off planted in the residual of two drawn levels (a term of a drawn 2-20
+    tolerances of |Y| whose sign flips at every evaluation, so that no Newton step can
+    fall below the tolerance there): the levels accepted at round-off are named in
+    ``fallbacks`` with their last update (between tol and STALL_FACTOR tol), the other
+    levels are not, and the answer moves by no more than the planted size."""
+    import fe.hb_resonance as hb
+    from fe.newton_path import STALL_FACTOR
+
+    rng = np.random.default_rng(1931)
+    hit = np.zeros(FORCES.size, dtype=bool)
+    hit[rng.choice(FORCES.size, 2, replace=False)] = True
+    size = rng.uniform(2.0, 20.0) * 1e-12
+    clean = resonance_levels(_sdof(), JOINT, np.ones(1), FORCES, 0)
+    assert clean.fallbacks == [""] * FORCES.size
+    original, calls = hb._Balance.residual, [0]
+
+    def jittered(self, Y, R, Ylin, omega):
+        res, *rest = original(self, Y, R, Ylin, omega)
+        calls[0] += 1
+        planted = (-1.0) ** calls[0] * size * hit * np.abs(Y).max(axis=1)
+        return (res + planted[:, None], *rest)
+
+    monkeypatch.setattr(hb._Balance, "residual", jittered)
+    res = resonance_levels(_sdof(), JOINT, np.ones(1), FORCES, 0)
+    named = np.array([bool(w) for w in res.fallbacks])
+    assert named.any() and not np.any(named & ~hit)
+    for w in np.array(res.fallbacks)[named]:
+        upd = float(w.split("relative update ")[1].split(",")[0])
+        assert 1e-12 <= upd < STALL_FACTOR * 1e-12
+    np.testing.assert_allclose(res.omega2, clean.omega2, rtol=1e-9)

@@ -200,7 +200,9 @@ def report(data, mask, s: dict, own: dict | None = None) -> dict:
                                    judged["candidates"].values() if c.fit is not None),
                 "folds": sum(c.cv_failed for c in judged["candidates"].values()),
                 "fits": sum(c.fit is None for c in judged["candidates"].values()),
-                "profile_points": sum(p.failed_points for p in profiles.values())}
+                "profile_points": sum(p.failed_points for p in profiles.values()),
+                "fallbacks": {n: p.fallback_lines(data.level) for n, p in
+                              (("base", base_pred), ("extended", ext_pred))}}
     summary = {
         "model": fe.label, "cause": sel.cause, "also": sel.also, "candidate": chosen.name,
         "fit_levels": [int(v) for v in data.level[mask]],

@@ -81,6 +81,8 @@ def format_fe(fe: dict) -> list:
     fl = fe["failures"]
     lines.append(f"  failures: {fl['simulations']} simulations, {fl['folds']} folds, "
                  f"{fl['fits']} fits, {fl['profile_points']} profile points")
+    lines.append("  steady states reached by a fallback: " + "; ".join(
+        f"{name} model {', '.join(fb) or 'none'}" for name, fb in fl["fallbacks"].items()))
     lines.append("  parameters (fitted; interval 95 %):")
     for n, p in fe["parameters"].items():
         iv = p["interval"]

@@ -135,13 +135,23 @@ class LinearPart:
 class LevelPrediction:
     """Per level: ``omega2`` (rad^2/s^2), ``zeta``, ``frequency_hz``, largest joint slip
     over ``phi_max`` (``slip_over_phi_max``), the joint (``R``, ``phi_max``, ``F_S``,
-    ``K_T``) the parameters made, and the mode's modal amplitude ``|q_k|`` (kg^1/2 m)."""
+    ``K_T``) the parameters made, the mode's modal amplitude ``|q_k|`` (kg^1/2 m) and
+    how each level's steady state was reached when not by an ordinary Newton
+    convergence (``fallbacks``, :attr:`fe.hb_resonance.ResonanceLevels.fallbacks`)."""
 
     omega2: np.ndarray
     zeta: np.ndarray
     slip_over_phi_max: np.ndarray
     joint: dict
     modal_amplitude: np.ndarray | None = None
+    fallbacks: list | None = None
+
+    def fallback_lines(self, labels=None) -> list[str]:
+        """One line per level whose steady state needed a fallback, named by its label
+        in ``labels`` (default 1, 2, ...)."""
+        fb = self.fallbacks or []
+        labels = range(1, len(fb) + 1) if labels is None else labels
+        return [f"level {lv}: {w}" for lv, w in zip(labels, fb) if w]
 
     @property
     def frequency_hz(self) -> np.ndarray:
@@ -320,15 +330,19 @@ class FELevels:
         self._warm[key] = res
         omega2, zeta = res.omega2, res.zeta
         slip, modal = res.slip_amplitude.max(axis=1), np.abs(res.q[:, lin.k])
+        fallbacks = list(res.fallbacks)
         if self.abscissa == "random":
             omega2, zeta = rayleigh_expectation(omega2.reshape(-1, n), zeta.reshape(-1, n),
                                                 weight)
             slip, modal = slip.reshape(-1, n).max(axis=1), modal.reshape(-1, n) @ weight
+            fallbacks = ["; ".join(dict.fromkeys(
+                f"at Rayleigh node {j + 1}: {w}" for j, w in enumerate(fallbacks[i:i + n]) if w))
+                for i in range(0, len(fallbacks), n)]
         joint = {k: v for k, v in j.items() if k not in ("params", "linear")}
         joint["grip"] = lin.grip
         joint["structure"] = self.structure(lin)
         return LevelPrediction(omega2=omega2, zeta=zeta, slip_over_phi_max=slip / j["phi_max"],
-                               joint=joint, modal_amplitude=modal)
+                               joint=joint, modal_amplitude=modal, fallbacks=fallbacks)
 
 
 def abscissa_of(data) -> str:

@@ -163,6 +163,7 @@ def summary(r: dict) -> dict:
             "untested": r["selection"]["untested"], "rule": "inverse.judge.select",
             "estimator_start": r["selection"]["estimator_start"],
             "failed_simulations": best.failed_simulations,
+            "fallbacks": pred.fallback_lines(data.level),
             "sensitivity": sens, "assumptions": assumptions,
             "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
             "confidence": r["settings"].confidence, "executor": r["executor"],
@@ -207,6 +208,9 @@ def format_text(s: dict) -> str:
         lines.append(f"not tested: {c} ({why})")
     if s.get("estimator_start", "used") != "used":
         lines.append(f"base fit started without the paper's estimator: {s['estimator_start']}")
+    if s["failed_simulations"] or s["fallbacks"]:
+        lines.append(f"failed simulations in the fit: {s['failed_simulations']}; steady states "
+                     f"reached by a fallback: {', '.join(s['fallbacks']) or 'none'}")
     lines.append("misfit:")
     lines.extend(f"  - {t}" for t in s["misfit"])
     for name, sv in s["sensitivity"].items():
