@@ -20,7 +20,7 @@ from runs.store import open_manifest
 
 __all__ = ["FORMAT", "SampleResult", "SampleStore", "describe"]
 
-FORMAT = "iwanfe-uncertainty/1"
+FORMAT = "iwanfe-uncertainty/2"
 
 
 @dataclass

@@ -70,7 +70,8 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
     hp = 2.0 * zeta * f0
     lines = np.linspace(f0 - BAND_HALF_POWER * hp, f0 + 0.5 * BAND_HALF_POWER * hp, LINES)
     camp = Campaign(lines, force, load, np.array([nc.response_dof]), HBProtocol(HB))
-    rec = run_campaign(red, bank, camp, progress=False).receptance[:, :, 0]
+    res = run_campaign(red, bank, camp, progress=False)
+    rec = res.receptance[:, :, 0]
     om2, ze = np.empty(force.size), np.empty(force.size)
     for lv in range(force.size):
         modes = identify_modes(lines, rec[lv], band=(lines[0], lines[-1]),
@@ -88,7 +89,8 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
                         mode=np.full(n, int(label)), run_order=run_order,
                         extra={"x_source": np.full(n, "simulated")})
     return data, {"chi": chi, "zeta_v": zeta, "f0_hz": f0, "phi_max": nc.phi_max,
-                  "top_slip_over_phi_max": TOP_SLIP, "forces_N": force.tolist()}
+                  "top_slip_over_phi_max": TOP_SLIP, "forces_N": force.tolist(),
+                  "fallbacks": res.fallback_summary()}
 
 
 def main(argv=None) -> int:

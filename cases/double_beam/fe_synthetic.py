@@ -110,13 +110,15 @@ def _joints(model, omega, phi, zeta, top_force, chi, beta, top_ratio):
 
 
 def _level(model, red, bank, force, lines_hz, k_scale, zeta_scale):
-    """One level's receptance at the response DOF (m/N) over ``lines_hz``."""
+    """One level's receptance at the response DOF (m/N) over ``lines_hz`` and how its
+    steady states were reached (:meth:`runs.campaign.CampaignResult.fallback_summary`)."""
     red_l = replace(red, K=red.K * k_scale, C=red.C * zeta_scale * math.sqrt(k_scale))
     load = np.zeros(model.M.shape[0])
     load[int(model.drive_dof)] = 1.0
     camp = Campaign(lines_hz, np.array([force]), load, np.array([int(model.response_dof)]),
                     HBProtocol(HB))
-    return run_campaign(red_l, bank, camp, progress=False).receptance[0, :, 0]
+    res = run_campaign(red_l, bank, camp, progress=False)
+    return res.receptance[0, :, 0], res.fallback_summary()
 
 
 def draw_case(seed: int, family: str | None = None) -> SyntheticFECase:
@@ -166,10 +168,12 @@ def draw_case(seed: int, family: str | None = None) -> SyntheticFECase:
         p = tau
     f0 = omega / (2 * np.pi)
     lines = f0 + LINES_HZ
-    om2, ze = np.empty(L), np.empty(L)
+    om2, ze, fallbacks = np.empty(L), np.empty(L), []
     for lv in range(L):
-        rec = _level(model, red, bank, force[lv], lines * math.sqrt(k_scale[lv]),
-                     k_scale[lv], z_scale[lv])
+        rec, how = _level(model, red, bank, force[lv], lines * math.sqrt(k_scale[lv]),
+                          k_scale[lv], z_scale[lv])
+        if how != "none":
+            fallbacks.append(f"level {lv + 1}: {how}")
         fl = lines * math.sqrt(k_scale[lv])
         modes = identify_modes(fl, rec, band=(fl[0], fl[-1]), weighting="uniform",
                                pseudo_modes=False)
@@ -189,5 +193,5 @@ def draw_case(seed: int, family: str | None = None) -> SyntheticFECase:
     truth = {"n_joints": cfg.n_joints, "K_T": cfg.glue_tangential_stiffness, "chi": chi,
              "beta": beta, "top_slip_ratio": ratio, "zeta_v": zeta, "size_sigma": size,
              "shape": p, "sigma_omega2_rel": s_w, "sigma_zeta_rel": s_z,
-             "std_columns": with_std}
+             "std_columns": with_std, "fallbacks": fallbacks}
     return SyntheticFECase(data=data, family=family, seed=int(seed), truth=truth)

@@ -155,7 +155,8 @@ def simulate_fe(inputs: SweepInputs, p=None, ln_kt=None) -> dict:
         ``frequency_hz``, ``zeta`` (modal filter), ``lscf_frequency_hz``, ``lscf_zeta``,
         ``slip_over_phi_max`` (largest joint slip at resonance / phi_max), all
         (n_levels,); ``chi``, ``R`` (N m^-(chi+2)), ``phi_max`` (m), ``zeta_viscous``,
-        ``first_line_hz`` (Hz).
+        ``first_line_hz`` (Hz), ``fallback_levels`` (levels with a steady state reached
+        by a fallback, :meth:`runs.campaign.CampaignResult.fallback_lines`).
 
     Notes
     -----
@@ -195,4 +196,5 @@ def simulate_fe(inputs: SweepInputs, p=None, ln_kt=None) -> dict:
             "lscf_frequency_hz": ident.frequency_hz, "lscf_zeta": ident.zeta,
             "slip_over_phi_max": np.nanmax(mf.slip, axis=1) / setup.phi_max,
             "chi": setup.chi, "R": setup.R, "phi_max": setup.phi_max,
-            "zeta_viscous": setup.zeta_viscous, "first_line_hz": study.band_hz[0]}
+            "zeta_viscous": setup.zeta_viscous, "first_line_hz": study.band_hz[0],
+            "fallback_levels": float(len(res.fallback_lines()))}

@@ -104,6 +104,12 @@ class UncertaintyReport:
                    for s in self.samples)
 
     @property
+    def n_fallback(self) -> int:
+        """Samples with a level whose steady states needed a fallback (``fallback_levels``
+        of :func:`cases.double_beam.uncertainty.simulate_fe`)."""
+        return sum(bool(s.ok and s.values.get("fallback_levels", 0) > 0) for s in self.samples)
+
+    @property
     def acceptance(self) -> float:
         """Samples over draws (the truncation's measured acceptance rate)."""
         draws = sum(s.n_draws for s in self.samples)
@@ -185,7 +191,7 @@ class UncertaintyReport:
                         "R": [float(s.values["R"]) if s.ok and "R" in s.values else None
                               for s in self.samples]},
             "n_failed": self.n_failed, "failures": self.failures(),
-            "n_retried_lower_start": self.n_retried,
+            "n_retried_lower_start": self.n_retried, "n_with_fallback": self.n_fallback,
             "lscf_disagreements": self.lscf_disagreements(),
             "hash": self.digest, "store": self.store, "timings_s": self.timings,
         }

@@ -9,8 +9,7 @@ at each level's force, solved by first-harmonic balance with the exact describin
 function at the phase resonance of the mode's modal filter
 (:func:`fe.hb_resonance.resonance_levels`). One campaign of 10 levels takes about 15 ms.
 A case supplies only :meth:`FELevels._build` (its FE model at a joint stiffness K_T,
-calibrated as the case calibrates): :class:`cases.double_beam.fe_levels.
-DoubleBeamLevels`, :class:`cases.casefile.levels.CaseLevels`.
+calibrated as the case calibrates), e.g. :class:`cases.casefile.levels.CaseLevels`.
 
 Parameters (SI units; how each enters):
 
@@ -135,9 +134,8 @@ class LinearPart:
 class LevelPrediction:
     """Per level: ``omega2`` (rad^2/s^2), ``zeta``, ``frequency_hz``, largest joint slip
     over ``phi_max`` (``slip_over_phi_max``), the joint (``R``, ``phi_max``, ``F_S``,
-    ``K_T``) the parameters made, the mode's modal amplitude ``|q_k|`` (kg^1/2 m) and
-    how each level's steady state was reached when not by an ordinary Newton
-    convergence (``fallbacks``, :attr:`fe.hb_resonance.ResonanceLevels.fallbacks`)."""
+    ``K_T``) the parameters made, the modal amplitude ``|q_k|`` (kg^1/2 m) and
+    ``fallbacks`` (:attr:`fe.hb_resonance.ResonanceLevels.fallbacks`)."""
 
     omega2: np.ndarray
     zeta: np.ndarray
@@ -147,11 +145,10 @@ class LevelPrediction:
     fallbacks: list | None = None
 
     def fallback_lines(self, labels=None) -> list[str]:
-        """One line per level whose steady state needed a fallback, named by its label
-        in ``labels`` (default 1, 2, ...)."""
+        """A line per level (``labels``, default 1, 2, ...) whose steady state needed one."""
         fb = self.fallbacks or []
-        labels = range(1, len(fb) + 1) if labels is None else labels
-        return [f"level {lv}: {w}" for lv, w in zip(labels, fb) if w]
+        return [f"level {lv}: {w}" for lv, w in zip(
+            range(1, len(fb) + 1) if labels is None else labels, fb) if w]
 
     @property
     def frequency_hz(self) -> np.ndarray:
@@ -335,9 +332,9 @@ class FELevels:
             omega2, zeta = rayleigh_expectation(omega2.reshape(-1, n), zeta.reshape(-1, n),
                                                 weight)
             slip, modal = slip.reshape(-1, n).max(axis=1), modal.reshape(-1, n) @ weight
-            fallbacks = ["; ".join(dict.fromkeys(
-                f"at Rayleigh node {j + 1}: {w}" for j, w in enumerate(fallbacks[i:i + n]) if w))
-                for i in range(0, len(fallbacks), n)]
+            fallbacks = ["; ".join(f"at Rayleigh node {j + 1}: {w}" for j, w in
+                                   enumerate(fallbacks[i:i + n]) if w)
+                         for i in range(0, len(fallbacks), n)]
         joint = {k: v for k, v in j.items() if k not in ("params", "linear")}
         joint["grip"] = lin.grip
         joint["structure"] = self.structure(lin)

@@ -108,7 +108,9 @@ def physical_check(pred, values: dict, stiffens: bool = False) -> None:
 def simulate_levels(inputs: LevelsSweepInputs, values: dict) -> dict:
     """One sample (module docstring): the parameter set ``values`` simulated from a cold
     start and checked. Returns ``frequency_hz``, ``zeta``, ``slip_over_phi_max``
-    (n_levels,) and ``chi``, ``R``, ``phi_max``, ``F_S``, ``zeta_viscous``, ``f0_hz``."""
+    (n_levels,) and ``chi``, ``R``, ``phi_max``, ``F_S``, ``zeta_viscous``, ``f0_hz``,
+    ``fallback_levels`` (levels whose steady state needed a fallback,
+    :attr:`cases.fe_loop.levels.LevelPrediction.fallbacks`)."""
     fe = _prepared(inputs)
     fe.reset()             # no warm start: a sample's bits do not depend on the executor
     ext = inputs.extension
@@ -118,7 +120,7 @@ def simulate_levels(inputs: LevelsSweepInputs, values: dict) -> dict:
             "slip_over_phi_max": pred.slip_over_phi_max, "chi": values["chi"],
             "R": pred.joint["R"], "phi_max": pred.joint["phi_max"],
             "F_S": pred.joint["F_S"], "zeta_viscous": values["zeta_v"],
-            "f0_hz": values["f0_hz"]}
+            "f0_hz": values["f0_hz"], "fallback_levels": float(len(pred.fallback_lines()))}
 
 
 def _quantiles(rows, q) -> dict:
@@ -162,7 +164,8 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     noise sd and fit test), ``distribution``, ``chi`` (quantiles of the physical
     samples), ``levels`` (per level: ``held_out``, measured, nominal, ``mc``
     median/lo/hi of frequency (Hz) and zeta, whether the measured value lies inside),
-    ``n_failed`` and ``failures`` (with the reason), ``computed`` (samples not loaded
+    ``n_failed`` and ``failures`` (with the reason), ``n_with_fallback`` (physical
+    samples with a level whose steady state needed a fallback), ``computed`` (samples not loaded
     from the store), ``store``, ``timing_s``.
     """
     if not 0 < confidence < 1:
@@ -215,6 +218,7 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
         "chi": {"median": float(np.median(chis)), "lo": float(np.quantile(chis, q[0])),
                 "hi": float(np.quantile(chis, q[1]))} if chis else None,
         "levels": rows, "n_failed": len(samples) - len(ok),
+        "n_with_fallback": sum(s.values.get("fallback_levels", 0) > 0 for s in ok),
         "failures": [{"index": s.index, "chi": s.p - 1.0, "status": s.status}
                      for s in samples if s.status != "ok"],
         "store": None if store is None else str(store.path),

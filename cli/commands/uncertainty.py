@@ -152,7 +152,8 @@ def text_report(rep, source: str, files, wall: float, case_name: str) -> str:
              + f", truncated to -1 < chi < 0 ({100 * dist.admissible_fraction():.1f} % of the "
                f"mass; acceptance {100 * rep.acceptance:.0f} %), seed {st.seed}; "
                f"{st.n_samples - rep.n_failed} simulated ({rep.n_retried} with lower first "
-               f"lines), {rep.n_failed} failed",
+               f"lines, {rep.n_fallback} with a steady state reached by a fallback), "
+               f"{rep.n_failed} failed",
              f"  per sample: FE double beam, {study.n_levels} levels x {study.lines.size} lines "
              f"({study.band_hz[0]:g}-{study.band_hz[1]:g} Hz), HB {study.hb.n_harmonics} "
              f"harmonics / {study.hb.n_time} AFT samples, {study.sliders_per_octave} sliders "

@@ -42,7 +42,8 @@ def text(r: dict) -> str:
              f"parameters' bounds ({_f(None if kept is None else 100 * kept, '.1f')} % of "
              f"the draws kept): chi median {ch['median']:.4f}, {lo:g}..{hi:g} % "
              f"{ch['lo']:.4f} .. {ch['hi']:.4f}; {r['n_failed']} failed (not physical or "
-             f"not simulated; left out of the quantiles)",
+             f"not simulated; left out of the quantiles), {r['n_with_fallback']} with a "
+             f"steady state reached by a fallback",
              f"  per sample: {r['route']}", ""]
     head = f" level     measured      nominal    MC median  {'MC %g..%g %%' % (lo, hi):^26s}  in"
     for name, key, scale, spec in (("natural frequency (Hz)", "frequency_hz", 1.0, "10.4f"),
