@@ -1,7 +1,8 @@
 """The wheel built by ``pip wheel .``: it holds every package and module of the source
 tree and the shipped data files, the build prints no setuptools warning about packages
-absent from the configuration, and, installed in a fresh virtual environment, its
-``iwanfe`` command runs from there.
+absent from the configuration, it declares the project's dependencies, and, installed
+in a fresh virtual environment (the dependencies taken from this one), its ``iwanfe``
+command runs from there.
 
 Truth: the source tree itself (every folder with ``__init__.py``, every module, the files
 of ``cases/data``) and, for the installed command, the closed form of the four-parameter
@@ -122,10 +123,30 @@ def _iwan_closed_form(chi, K_T, F_S, beta, A):
             "stiffness_quadrature": D / (np.pi * A ** 2), "stiffness_in_phase": k_in}
 
 
+def test_wheel_declares_the_projects_dependencies(wheel):
+    """The wheel's ``Requires-Dist`` are the dependencies of ``pyproject.toml`` (the
+    installed-wheel test below takes them from this environment, where ``make test``
+    installed them from the same list)."""
+    import tomllib
+
+    path, _ = wheel
+    z = zipfile.ZipFile(path)
+    (meta,) = [n for n in z.namelist() if n.endswith(".dist-info/METADATA")]
+    declared = {line.split(":", 1)[1].strip().replace(" ", "")
+                for line in z.read(meta).decode().splitlines()
+                if line.startswith("Requires-Dist:") and "extra ==" not in line}
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert declared == {d.replace(" ", "") for d in project["dependencies"]}
+
+
 @pytest.mark.slow
 def test_installed_wheel_runs_joint_command(wheel):
-    """Fresh venv, ``pip install <wheel>`` (dependencies from the pip cache or the index),
-    then the installed ``iwanfe joint`` against the closed form (about 30-40 s)."""
+    """Fresh venv, ``pip install --no-deps <wheel>`` with this environment's
+    site-packages appended to its path (a ``.pth`` line: the dependencies, not this
+    checkout, whose editable hook is not run), then the installed ``iwanfe joint``
+    against the closed form."""
+    import site
+
     path, _ = wheel
     chi, K_T, F_S, beta, A = -0.5, 1.1e5, 400.0, 4.0, 1e-3
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
@@ -133,8 +154,10 @@ def test_installed_wheel_runs_joint_command(wheel):
         venv = Path(tmp) / "venv"
         subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=120)
         py = venv / "bin" / "python"
-        inst = subprocess.run([str(py), "-m", "pip", "install", "-q", str(path)], env=env,
-                              capture_output=True, text=True, timeout=600)
+        (own,) = (venv / "lib").glob("python3*/site-packages")
+        (own / "iwanfe-test-dependencies.pth").write_text("\n".join(site.getsitepackages()))
+        inst = subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", str(path)],
+                              env=env, capture_output=True, text=True, timeout=600)
         assert inst.returncode == 0, (inst.stdout + inst.stderr)[-3000:]
         # imports resolve to the installed copy and the data file ships with it
         where = subprocess.run(
