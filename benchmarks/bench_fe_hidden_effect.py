@@ -14,7 +14,8 @@ gain leave-one-level-out) sees only the measured-data table.
 Scored per family: the answer (``none``, the cause, or ``unexplained`` for
 out-of-catalogue). Checks printed: no false alarm on ``none`` draws; a cause is named
 only with a held-out gain > 1; no internal failure would leave as exit 2 (a plain
-``ValueError`` escaping the FE level); failures (simulations, folds, fits) counted.
+``ValueError`` escaping the FE level); failures (simulations, folds, fits) and the
+levels reached by a fallback counted.
 
 Usage::
 
@@ -109,6 +110,9 @@ def main() -> None:
     print(f"exit 2 from an internal failure: {len(leaks)} ({'met' if not leaks else 'NOT met'}); "
           f"internal failures reported as such (exit 1): {len(internal)}")
     print("failures counted: " + ", ".join(f"{k} {v}" for k, v in fails.items()))
+    steady = sum(len(v) for r in rows for v in r["failures"].get("fallbacks", {}).values())
+    print(f"steady states of the base and extended models reached by a fallback: {steady} "
+          f"levels")
     print(f"passed {sum(r['passed'] for r in rows)} of {len(rows)}; "
           f"{time.perf_counter() - t0:.0f} s wall ({spec.describe()}), "
           f"{np.median([r['seconds'] for r in rows]):.1f} s median per draw")
