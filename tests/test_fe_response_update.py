@@ -18,7 +18,7 @@ import fe_response_synth as synth
 from cases.double_beam.fe_levels import DoubleBeamLevels
 from cases.fe_loop.levels import abscissa_of
 from fe.hb_resonance import resonance_levels
-from fe.hb_response import response_levels
+from fe.hb_response import BRACKETED, response_levels
 from ident.measured import write_measured
 
 
@@ -35,7 +35,10 @@ def _planted_on(amplitudes, abscissa):
 
 def test_held_response_gives_back_the_force_route_levels():
     """Closed loop: the response amplitudes the force route gives at 10 forces over 3
-    decades (micro slip to macro slip), held, give back its omega^2, zeta and force."""
+    decades (micro slip to macro slip), held, give back its omega^2, zeta and force.
+    With two Newton steps on (ln w, ln F) instead of 8, more levels are left unsettled
+    and go to the bracketed secant: each names it in ``fallbacks`` (as the 8-step path
+    names its own), and the answer is the force route's all the same."""
     ref, p, j = synth.planted()
     lin = j["linear"]
     _, red, scale, _, _ = ref.setup(p)
@@ -49,6 +52,13 @@ def test_held_response_gives_back_the_force_route_levels():
     np.testing.assert_allclose(r.zeta, f.zeta, rtol=1e-8)
     np.testing.assert_allclose(r.force, forces, rtol=1e-8)
     np.testing.assert_allclose(np.abs(r.response), held, rtol=1e-9)
+    short = response_levels(red, j["params"], lin.load, held, lin.response_row, lin.k,
+                            scale=scale[0], max_steps=2)
+    np.testing.assert_allclose(short.omega2, f.omega2, rtol=1e-10)
+    np.testing.assert_allclose(short.force, forces, rtol=1e-7)
+    took = {n: np.array([BRACKETED in w for w in x.fallbacks]) for n, x in ((8, r), (2, short))}
+    assert took[2].sum() > took[8].sum() and not took[2].all()
+    assert np.all(took[2] | ~took[8])      # what 8 steps could not settle, 2 could not
 
 
 def test_response_route_is_the_epmc_backbone():
@@ -128,27 +138,3 @@ def test_update_recovers_chi_from_a_random_series(tmp_path):
     base = fe_select(data, mask, DoubleBeamLevels.from_data(data), causes=())["base"]
     assert abs(base.fit.values["chi"] - synth.CHI) < 0.05
     assert base.fit.failed_simulations == 0
-
-
-
-def test_levels_left_to_the_bracketed_fallback_say_so():
-    """With two Newton steps on (ln w, ln F) allowed instead of 8, more levels are left
-    unsettled and go to the bracketed secant: each of them names it in ``fallbacks``
-    (the 8-step path names its own), and every level's answer is the force route's."""
-    from fe.hb_response import BRACKETED
-
-    ref, p, j = synth.planted()
-    lin = j["linear"]
-    _, red, scale, _, _ = ref.setup(p)
-    forces = np.geomspace(1e-4, 0.3, 10)
-    f = resonance_levels(red, j["params"], lin.load, forces, lin.k, scale=scale[0])
-    held = np.abs(f.q @ lin.response_row)
-    took = {}
-    for steps in (8, 2):
-        r = response_levels(red, j["params"], lin.load, held, lin.response_row, lin.k,
-                            scale=scale[0], max_steps=steps)
-        took[steps] = np.array([BRACKETED in w for w in r.fallbacks])
-        np.testing.assert_allclose(r.omega2, f.omega2, rtol=1e-10)
-        np.testing.assert_allclose(r.force, forces, rtol=1e-7)
-    assert took[2].sum() > took[8].sum() and not took[2].all()
-    assert np.all(took[2] | ~took[8])      # what 8 steps could not settle, 2 could not
