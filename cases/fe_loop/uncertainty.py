@@ -165,8 +165,8 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     samples), ``levels`` (per level: ``held_out``, measured, nominal, ``mc``
     median/lo/hi of frequency (Hz) and zeta, whether the measured value lies inside),
     ``n_failed`` and ``failures`` (with the reason), ``n_with_fallback`` (physical
-    samples with a level whose steady state needed a fallback), ``computed`` (samples not loaded
-    from the store), ``store``, ``timing_s``.
+    samples with a level whose steady state needed a fallback), ``computed`` (samples
+    not loaded from the store), ``store``, ``timing_s``.
     """
     if not 0 < confidence < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
@@ -218,7 +218,7 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
         "chi": {"median": float(np.median(chis)), "lo": float(np.quantile(chis, q[0])),
                 "hi": float(np.quantile(chis, q[1]))} if chis else None,
         "levels": rows, "n_failed": len(samples) - len(ok),
-        "n_with_fallback": sum(s.values.get("fallback_levels", 0) > 0 for s in ok),
+        "n_with_fallback": int(sum(s.values.get("fallback_levels", 0) > 0 for s in ok)),
         "failures": [{"index": s.index, "chi": s.p - 1.0, "status": s.status}
                      for s in samples if s.status != "ok"],
         "store": None if store is None else str(store.path),
