@@ -190,14 +190,16 @@ class CampaignResult:
     protocol: str
     fallbacks: np.ndarray
 
-    def fallback_lines(self) -> list[str]:
-        """One line per level whose steady states needed a fallback: the level, how many
-        lines, the first line's frequency and how it was reached."""
+    def fallback_lines(self, labels=None) -> list[str]:
+        """One line per level whose steady states needed a fallback: the level (its label
+        in ``labels``, default 1, 2, ...), how many lines, the first line's frequency and
+        how it was reached."""
         out = []
-        for i, row in enumerate(self.fallbacks):
+        labels = range(1, len(self.fallbacks) + 1) if labels is None else labels
+        for i, (label, row) in enumerate(zip(labels, self.fallbacks)):
             hit = np.flatnonzero(row != "")
             if hit.size:
-                out.append(f"level {i + 1} (F = {self.force[i]:.4g} N): {hit.size} of "
+                out.append(f"level {label} (F = {self.force[i]:.4g} N): {hit.size} of "
                            f"{row.size} lines, first at {self.frequency_hz[hit[0]]:.6g} Hz: "
                            f"{row[hit[0]]}")
         return out

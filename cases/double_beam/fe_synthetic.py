@@ -109,16 +109,17 @@ def _joints(model, omega, phi, zeta, top_force, chi, beta, top_ratio):
                            beta=beta) for k in kj], pm
 
 
-def _level(model, red, bank, force, lines_hz, k_scale, zeta_scale):
-    """One level's receptance at the response DOF (m/N) over ``lines_hz`` and how its
-    steady states were reached (:meth:`runs.campaign.CampaignResult.fallback_summary`)."""
+def _level(model, red, bank, force, lines_hz, k_scale, zeta_scale, label):
+    """Level ``label``: its receptance at the response DOF (m/N) over ``lines_hz`` and
+    how its steady states were reached when not by plain Newton
+    (:meth:`runs.campaign.CampaignResult.fallback_lines`, empty without)."""
     red_l = replace(red, K=red.K * k_scale, C=red.C * zeta_scale * math.sqrt(k_scale))
     load = np.zeros(model.M.shape[0])
     load[int(model.drive_dof)] = 1.0
     camp = Campaign(lines_hz, np.array([force]), load, np.array([int(model.response_dof)]),
                     HBProtocol(HB))
     res = run_campaign(red_l, bank, camp, progress=False)
-    return res.receptance[0, :, 0], res.fallback_summary()
+    return res.receptance[0, :, 0], res.fallback_lines([label])
 
 
 def draw_case(seed: int, family: str | None = None) -> SyntheticFECase:
@@ -171,9 +172,8 @@ def draw_case(seed: int, family: str | None = None) -> SyntheticFECase:
     om2, ze, fallbacks = np.empty(L), np.empty(L), []
     for lv in range(L):
         rec, how = _level(model, red, bank, force[lv], lines * math.sqrt(k_scale[lv]),
-                          k_scale[lv], z_scale[lv])
-        if how != "none":
-            fallbacks.append(f"level {lv + 1}: {how}")
+                          k_scale[lv], z_scale[lv], lv + 1)
+        fallbacks += how
         fl = lines * math.sqrt(k_scale[lv])
         modes = identify_modes(fl, rec, band=(fl[0], fl[-1]), weighting="uniform",
                                pseudo_modes=False)
