@@ -97,7 +97,8 @@ def _cv(c: FitCandidate, say) -> None:
         c.cv_done = True
 
 
-def _candidates(cands, base_cv) -> list:
+def _candidates(cands, base: FitCandidate) -> list:
+    base_cv = base.cv_error
     out = []
     for c in cands:
         if c.fit is None:
@@ -109,8 +110,12 @@ def _candidates(cands, base_cv) -> list:
             gain = base_cv / c.cv_error if c.cv_error > 0 else math.inf
         if c.chi2_by_channel is None:
             c.chi2_by_channel = c.problem.chi2_by_channel(c.fit.values)
+        # cross-validated without a failure and still no error: no interior level
+        untestable = ("fewer than 3 fit levels: none to leave out"
+                      if c.causes and gain is None and c.cv_done and base.cv_done
+                      and not (c.cv_failed or base.cv_failed) else None)
         out.append(Candidate(c.causes, c.fit.k, c.fit.chi2, c.fit.n, gain, c.cv_failed,
-                             c.excluded, c.chi2_by_channel or None))
+                             c.excluded, c.chi2_by_channel or None, untestable))
     return out
 
 
@@ -136,7 +141,7 @@ def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None)
     # weights and fit tests do not need the gain: compute the gain lazily, heaviest
     # first, until the named candidate and its possible rivals are settled
     while True:
-        sel = select(_candidates(cands, base_cv), noise)
+        sel = select(_candidates(cands, base), noise)
         pending = [c for c in cands if c.causes and not c.cv_done and c.fit is not None
                    and not c.excluded and sel.tests[c.name].passes()]
         if not pending:

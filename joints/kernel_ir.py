@@ -62,7 +62,7 @@ def _simd_blocks(typingctx, s, x, phi, k, ix, ip, ik, n):
                 v = builder.insert_element(v, value, _ir.Constant(i32, m))
             return v
 
-        sv = sv_full = splat(s_v, LANES)
+        sv_full = splat(s_v, LANES)
         zero = _ir.Constant(vty, [0.0] * LANES)
 
         def block(i, f_acc, t_acc, width=LANES):

@@ -108,6 +108,19 @@ def test_select_names_a_cause_only_within_noise_and_with_a_gain():
     # the same fit with failed folds: a gain that is None cannot be named
     s = select([base, Candidate(("macro-slip",), 4, 5.0, 10, gain=None, failures=2)], nm)
     assert s.unexplained and "failed folds" in s.why_not["macro-slip"]
+    # a gain not (yet) computed cannot be named either (the FE level computes it lazily)
+    s = select([base, Candidate(("macro-slip",), 4, 5.0, 10, gain=None)], nm)
+    assert s.unexplained and "not computed" in s.why_not["macro-slip"]
+    # too few levels to measure any gain: judged by the fit test and the IC alone
+    few = "6 data without one level for 6 parameters"
+    s = select([base, Candidate(("macro-slip",), 4, 5.0, 10, gain=None,
+                                gain_untestable=few)], nm)
+    assert s.cause == "macro-slip" and "macro-slip" not in s.why_not
+    s = select([Candidate((), 3, 6.0, 10), Candidate(("x",), 4, 5.0, 10,
+                                                     gain_untestable=few)], nm)
+    assert s.cause == "none" and s.eligible == ["none", "x"]    # the IC keeps the base
+    s = select([base, Candidate(("x",), 4, 60.0, 10, gain_untestable=few)], nm)
+    assert s.unexplained and "outside the noise" in s.why_not["x"]
     # the base model within noise, the extension no better on held-out levels
     s = select([Candidate((), 3, 6.0, 10), Candidate(("x",), 4, 1.0, 10, gain=0.9)], nm)
     assert s.cause == "none" and "gain" in s.why_not["x"]

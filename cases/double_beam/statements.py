@@ -5,7 +5,12 @@ numbers (``report.md``, ``report.json``, the command's text output).
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from inverse.iwan_modal import kappa_ratio
+
+if TYPE_CHECKING:                   # report.py imports this module
+    from cases.double_beam.report import DoubleBeamReport
 
 __all__ = ["headline", "assumption_statements"]
 

@@ -28,7 +28,7 @@ import numpy as np
 from inverse.diagnosis.fit import Fit, fit_folds, fit_model
 from inverse.diagnosis.models import Observations
 
-__all__ = ["leave_one_out", "held_out_top", "n_top"]
+__all__ = ["leave_one_out", "untestable_gain", "held_out_top", "n_top"]
 
 
 def leave_one_out(full: Fit, obs: Observations, iters: int = 12):
@@ -54,6 +54,18 @@ def leave_one_out(full: Fit, obs: Observations, iters: int = 12):
     if failed:
         return None, res, f"{failed} of {len(trains)} folds failed", failed
     return float(np.sqrt(np.nanmean(res**2))), res, None, 0
+
+
+def untestable_gain(entry, base) -> str | None:
+    """Why no held-out gain can be measured at all (too few levels to leave one out),
+    from the :func:`leave_one_out` answers of a candidate (``entry``) and of the base
+    model (``base``); None when the gain was measured or a fold failed (a failure
+    is counted, not a property of the data)."""
+    err, _, why, failed = entry
+    base_err, _, base_why, base_failed = base
+    if (err is not None and base_err is not None) or failed or base_failed:
+        return None
+    return why or base_why
 
 
 def n_top(n: int) -> int:

@@ -1,7 +1,8 @@
 """The JSON object of a diagnosis (``shared/spec/diagnosis.md`` v2), from the pieces
 :func:`inverse.diagnose.diagnose` computed.
 
-Keys: ``cause``, ``also``, ``alternatives``, ``ambiguous`` (+ ``ambiguity``: who ties
+Keys: ``cause``, ``also``, ``alternatives`` (each with ``gain_untestable``: why no
+held-out gain can be measured on these levels, or None), ``ambiguous`` (+ ``ambiguity``: who ties
 and what measurement separates them), ``contradictions`` (plain strings) and
 ``contradiction_details``, ``parameters`` (model, chi, ...; fitted), ``base_parameters``,
 ``base_error``, ``extended_error``, ``gain``, ``gain_held_out``, ``error_measure``,
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from inverse.diagnosis.cv import untestable_gain
 from inverse.diagnosis.separability import separating_measurement
 from inverse.diagnosis.text import describe, extrapolation_note
 from inverse.judge import P_UNEXPLAINED, T_CAUSE, W_AMBIGUOUS, Bounded, at_bound
@@ -126,6 +128,8 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
         alternatives.append({
             "causes": list(f.model.causes) or ["none"], "weight": sel.weights[name],
             "gain": _ratio(base_err, err) if name != "none" else 1.0,
+            "gain_untestable": None if name == "none" else untestable_gain(cv[name],
+                                                                          cv["none"]),
             "within_noise": sel.tests[name].passes(),
             "refuted": bool(refuted and name == "none")})
     alternatives.sort(key=lambda a: -a["weight"])

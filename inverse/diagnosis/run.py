@@ -17,7 +17,9 @@ and no effect a nested extension with ``q`` extra parameters passes with probabi
 of freedom the drop of chi2 enters at its known-noise equivalent, which keeps that
 rate) and its Akaike weight. Eligible are the
 candidates within the noise (fit test, p >= 1e-3) whose held-out (leave-one-level-out)
-gain exceeds 1; the named explanation is the eligible one of largest weight,
+gain exceeds 1 (on a series too short to leave a level out, where no gain can be
+measured, by the fit test and IC alone); the named explanation is the eligible one of
+largest weight,
 ``ambiguous`` when another has a third of its weight (:data:`W_AMBIGUOUS`; an evidence
 ratio below 3 is "barely worth mentioning", Jeffreys). Contradictions
 (:func:`inverse.contradictions.iwan_contradictions`, the base fit collapsing to no
@@ -40,7 +42,7 @@ from ident.measured import MeasuredData
 from ident.modal_data import mean_per_level
 from inverse.contradictions import NoiseLevels, iwan_contradictions
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
-from inverse.diagnosis.cv import held_out_top, leave_one_out, n_top
+from inverse.diagnosis.cv import held_out_top, leave_one_out, n_top, untestable_gain
 from inverse.diagnosis.fit import fit_model, profile_interval
 from inverse.diagnosis.intervals import (averaging_weights, model_averaged,
                                          prediction_intervals)
@@ -141,7 +143,7 @@ def _candidates(fits, cv, obs, refuted):
     base_err = cv["none"][0]
     out = []
     for k, f in fits.items():
-        err, _, _, failed = cv.get(k, (None, None, None, 0))
+        err, _, _, failed = cv[k]
         gain = None if base_err is None or err is None or err <= 0 else base_err / err
         excluded = ("refuted by the contradictions" if refuted and k == "none"
                     else _inactive(f, obs) if k != "none" else None)
@@ -151,6 +153,7 @@ def _candidates(fits, cv, obs, refuted):
         out.append(Candidate(f.model.causes, f.n_params, f.chi2, f.n_data,
                              gain=1.0 if k == "none" else gain, failures=failed,
                              excluded=excluded,
+                             gain_untestable=untestable_gain(cv[k], cv["none"]),
                              chi2_by_channel=dict(zip(obs.channels, np.sum(r**2, axis=1)))))
     return out
 

@@ -92,8 +92,9 @@ def describe(cause: str, also: list, params: dict, gain, test: dict, contradicti
     else:
         words = "; ".join(CATALOGUE[c].WORDS for c in [cause, *also])
         gain_text = (f"cuts the leave-one-level-out prediction error by a factor {g}"
-                     if gain is not None else "has too many parameters for a "
-                     "leave-one-level-out error on these levels")
+                     if gain is not None else "cannot be tested on unseen levels: it has "
+                     "as many parameters as the data left without one level, so it is "
+                     "named on its fit test and information criterion alone")
         text = (f"Cause {_fmt_causes(cause, also)}: {words}. The extended model "
                 f"{gain_text} (chi = {chi:.3f}).")
     if rivals:

@@ -64,7 +64,12 @@ channels pooled. A candidate is *eligible* when its fit test
 gives ``p >= P_UNEXPLAINED``, it is not excluded (a refuted base model, an inactive
 extension) and, if it names a cause, its held-out gain exceeds 1 (a gain over failed
 folds is None: not eligible) and, for several causes, that of each of its causes alone
-(where known: the added cause must predict unseen levels better). The named
+(where known: the added cause must predict unseen levels better). A series too short to
+leave a level out (the candidate has as many parameters as the data without one
+level) has no gain to measure: there the candidate is judged by its fit test and its
+IC alone, and the report says the gain is ``n/a`` and why (``unexplained`` would be
+false when it brings the data within their noise, and ``none`` when the base model is
+refuted or its IC far worse). The named
 explanation is the eligible candidate of
 largest weight; none eligible: ``unexplained``, with the closest miss and why it
 missed. ``ambiguous`` when another eligible candidate has at least

@@ -103,7 +103,9 @@ class Candidate:
     ``n_data`` data, held-out ``gain`` (None: folds failed or too few data), ``failures``
     (failed fits or folds), ``excluded`` (a reason it may not be named, or None),
     ``chi2_by_channel`` (``{channel: chi2}``, optional: the drop's degrees of freedom,
-    :func:`drop_dof`)."""
+    :func:`drop_dof`), ``gain_untestable`` (why no held-out gain can be measured on
+    these data at all, e.g. as many parameters as data without one level; not a
+    failure: the candidate is then judged by its fit test and IC alone, module doc)."""
 
     causes: tuple
     n_params: int
@@ -113,6 +115,7 @@ class Candidate:
     failures: int = 0
     excluded: str | None = None
     chi2_by_channel: dict | None = None
+    gain_untestable: str | None = None
 
     @property
     def name(self) -> str:
@@ -159,10 +162,10 @@ def _why_not(c: Candidate, test: FitTest, p_min: float):
         return test.test
     if test.p_value < p_min:
         return f"outside the noise (p = {test.p_value:.2g} < {p_min:g}, {test.test})"
-    if c.causes and c.gain is None:
+    if c.causes and c.gain is None and not c.gain_untestable:
         return ("no held-out gain (failed folds)" if c.failures
-                else "no held-out gain (too few levels)")
-    if c.causes and c.gain <= 1.0:
+                else "no held-out gain (not computed)")
+    if c.causes and c.gain is not None and c.gain <= 1.0:
         return f"held-out gain {c.gain:.3g} <= 1"
     return None
 
