@@ -1,9 +1,10 @@
 """Backbone of the FE double beam: EPMC on the exact-DF path vs the bank path vs the
 response-controlled stepped sine that gives the same curve, measured in one run.
 
-Model: the shipped double beam with its simulated glue (:func:`cases.nonlinear_case.double_beam_case`:
-45 reduced DOFs, 5 Iwan glue elements, chi and R~ from the measured levels 1-7, 252
-Jenkins sliders per joint on the bank path). Target: mode 4 (252 Hz).
+Model: the shipped double beam with its simulated glue
+(:func:`cases.nonlinear_case.double_beam_case`: 45 reduced DOFs, 5 Iwan glue elements, chi
+and R~ from the measured levels 1-7, 252 Jenkins sliders per joint on the bank path).
+Target: mode 4 (252 Hz).
 
 1. EPMC (:func:`fe.epmc.epmc_backbone`), 50 points log-spaced from 1e-3 to 3 phi_max
    of the joint that slips most: exact-DF path (first harmonic, continuous Iwan joints)
@@ -92,7 +93,8 @@ def main() -> None:
               + (f", x{scale:.0f} for 50 levels = {cpu * scale:.1f} s" if scale > 1 else ""))
         print(f"  stepped sine / EPMC ({path}): {cpu * scale / res[path][1]:.0f}x; "
               f"stepped sine ({path}) / EPMC exact: {cpu * scale / res['exact'][1]:.0f}x")
-        print(f"  same curve: micro-slip ({micro.sum()} levels) |df/f| <= {f_dev[micro].max():.1e}, "
+        print(f"  same curve: micro-slip ({micro.sum()} levels) "
+              f"|df/f| <= {f_dev[micro].max():.1e}, "
               f"|dzeta/zeta| <= {z_dev[micro].max():.1e}; all levels (to 3 phi_max) "
               f"{f_dev.max():.1e}, {z_dev.max():.1e}")
     e, b = res["exact"][0], res["bank"][0]

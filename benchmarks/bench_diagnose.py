@@ -79,7 +79,8 @@ def _diagnose(data):
           for k, v in (r.get("evidence") or {}).items()}
     return {"cause": r["cause"], "also": list(r["also"]),
             "held_out_predictions": r.get("held_out_predictions"),
-            "evidence": ev, "noise": {k: v.get("source") for k, v in (r.get("noise") or {}).items()},
+            "evidence": ev,
+            "noise": {k: v.get("source") for k, v in (r.get("noise") or {}).items()},
             "noise_dof": {k: v.get("dof") for k, v in (r.get("noise") or {}).items()},
             "seconds": time.perf_counter() - t0}
 
@@ -262,7 +263,10 @@ def score(rows, gen, path):
     none_other = n[1] - n[0]
     errors = sum("cause" not in r for _, r in got)
     cov = coverage([r for _, r in got])
-    pct = lambda a: f"{a[0]}/{a[1]} = {100 * a[0] / max(a[1], 1):5.1f} %"  # noqa: E731
+
+    def pct(a):
+        return f"{a[0]}/{a[1]} = {100 * a[0] / max(a[1], 1):5.1f} %"
+
     cov_txt = "n/a (no held_out_predictions)" if cov is None else (
         f"{cov[0]}/{cov[1]} = {100 * cov[0] / max(cov[1], 1):.1f} %" + (
             "" if cov[1] >= 200 else " (fewer than 200 predictions)"))

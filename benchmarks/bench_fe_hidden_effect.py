@@ -88,7 +88,8 @@ def main() -> None:
         g = "n/a" if r["gain"] is None else f"{r['gain']:.2f}"
         p = "n/a" if r["p"] is None else f"{r['p']:.2g}"
         print(f"{r['seed']:5d}  {r['family']:20s} {r['answer']:20s} {str(r['named']):20s} "
-              f"{','.join(r['also']) or '-':14s} {g:>6s} {p:>8s} {'yes' if r['std_columns'] else 'no ':3s}"
+              f"{','.join(r['also']) or '-':14s} {g:>6s} {p:>8s} "
+              f"{'yes' if r['std_columns'] else 'no ':3s}"
               f"  {r['exit']:4d}  {'yes' if r['passed'] else 'NO'}"
               + (f"  ({r['error']})" if r["error"] else ""))
     by = defaultdict(list)

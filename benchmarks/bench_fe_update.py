@@ -103,7 +103,8 @@ def campaign_benchmark(repeat: int) -> None:
           "df vs bank LSCF [Hz]  dzeta vs LSCF")
     for lv in range(len(f_df)):
         top = res.slip_amplitude[lv].max() / setup.phi_max
-        print(f"   {lv + 1:5d} {top:12.3g} {f_df[lv]:16.6f} {f_df[lv] - mf.frequency_hz[lv]:+19.2e} "
+        print(f"   {lv + 1:5d} {top:12.3g} {f_df[lv]:16.6f} "
+              f"{f_df[lv] - mf.frequency_hz[lv]:+19.2e} "
               f"{res.zeta[lv] / mf.zeta[lv] - 1:+17.2e} {f_df[lv] - ident.frequency_hz[lv]:+21.2e} "
               f"{res.zeta[lv] / ident.zeta[lv] - 1:+14.2e}")
 

@@ -314,7 +314,10 @@ def main(argv=None):
 
     print("\n## targets\n")
     lo, hi = TARGET_EXPONENT
-    verdict = lambda ok: "met" if ok else "NOT met"  # noqa: E731
+
+    def verdict(ok):
+        return "met" if ok else "NOT met"
+
     print(f"kernel rate >= {TARGET_RATE:.0e}/s: median {med:.3g}/s over banks >= 1e4 "
           f"sliders, best {best:.3g}/s -> {verdict(med >= TARGET_RATE)}")
     print(f"kernel / numpy >= {TARGET_RATIO:.0f}x: {min(ratios):.1f}x .. {max(ratios):.1f}x "

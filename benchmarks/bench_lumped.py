@@ -70,11 +70,15 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     run_campaign(model, bank, Campaign(few, [F[3]], load, outputs, proto), progress=False)
     t_few = time.perf_counter() - t0
-    steps = lambda f: np.sum(np.round((proto.settle + proto.window) * f * proto.steps_per_period))
+
+    def steps(f):
+        return np.sum(np.round((proto.settle + proto.window) * f * proto.steps_per_period))
+
     per_step = t_few / steps(few)
     t_paper = per_step * steps(lines) * F.size
     print(f"[2] paper protocol (9 s + 1 s per line from rest, {proto.steps_per_period} steps "
-          f"per period) measured on {few.size} line(s) {[float(x) for x in few]} Hz: {t_few:.2f} s, "
+          f"per period) measured on {few.size} line(s) {[float(x) for x in few]} Hz: "
+          f"{t_few:.2f} s, "
           f"{1e6 * per_step:.2f} us per step")
     print(f"    full campaign EXTRAPOLATED from that rate ({steps(lines) * F.size:.3g} steps): "
           f"{t_paper:.0f} s = {t_paper / 3600:.2f} h (not run in full)")

@@ -2,10 +2,10 @@
 
 Runs ``iwanfe reproduce lumped``, ``iwanfe reproduce double-beam`` and ``iwanfe
 uncertainty`` (default settings, serial, output to a temporary directory, no progress
-bars) one after the other as ``python -m cli.main ...`` and prints each child's peak resident set size
-(``ru_maxrss`` from ``os.wait4``; KiB on Linux) in MiB, with its wall time and exit
-status. A command that fails (e.g. a target not implemented yet) is reported with the
-last line of its stderr and skipped. Only the child process itself is measured: with
+bars) one after the other as ``python -m cli.main ...`` and prints each child's peak
+resident set size (``ru_maxrss`` from ``os.wait4``; KiB on Linux) in MiB, with its wall time
+and exit status. A command that fails (e.g. a target not implemented yet) is reported with
+the last line of its stderr and skipped. Only the child process itself is measured: with
 ``--workers`` the workers' memory would not be included, so the default serial runs
 are measured.
 

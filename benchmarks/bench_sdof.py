@@ -283,7 +283,8 @@ def section_newmark(args, mass, c, model, bank):
         walls["plain numpy"].append((time.perf_counter() - w0) / n_plain)
     u = run.q[:, 0] * model.basis[0, 0]
     traj_plain = np.abs(plain - u[:n_plain + 1]).max() / np.abs(u[:n_plain + 1]).max()
-    traj_ref = np.abs(ref.q[:, 0] - run.q[:ref_steps + 1, 0]).max() / np.abs(run.q[:ref_steps + 1, 0]).max()
+    traj_ref = (np.abs(ref.q[:, 0] - run.q[:ref_steps + 1, 0]).max()
+                / np.abs(run.q[:ref_steps + 1, 0]).max())
     # steady state: first harmonic of the last two periods, vs HB of the same bank
     theta = w_drive * dt * np.arange(periods * N - N, periods * N)
     X_last = first_harmonic(run.slip[-N - 1:-1, 0], theta)

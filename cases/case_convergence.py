@@ -112,7 +112,8 @@ def format_case_convergence(r: dict) -> str:
     ok = np.vstack([ok, np.ones((1, n), bool)])              # the finest: 0 by definition
     lines = [f"{r['case']}: first elastic modes under mesh refinement, against "
              f"{r['reference']}",
-             f"{'elem_mm':>8} {'dofs':>6} " + " ".join(f"{'mode ' + str(j + 1):>12}" for j in range(n))]
+             f"{'elem_mm':>8} {'dofs':>6} "
+             + " ".join(f"{'mode ' + str(j + 1):>12}" for j in range(n))]
     for h, d, f, c, k in zip(r["element_size_m"], r["n_free_dofs"], r["frequency_hz"],
                              r["relative_change_vs_finest"], ok):
         lines.append(f"{1e3 * h:8.3f} {d:6d} " + " ".join(f"{v:12.4f}" for v in f))

@@ -41,8 +41,11 @@ def cantilever_beta_l(n_modes: int) -> np.ndarray:
     change in ``[(n - 1) pi, n pi]`` (``[0.5, pi]`` for n = 1), where ``cos`` changes sign
     once and ``1/cosh`` < 0.09.
     """
-    f = lambda x: np.cos(x) + 1.0 / np.cosh(x)  # noqa: E731
-    return np.array([brentq(f, (n - 1) * np.pi + 1e-9 if n > 1 else 0.5, n * np.pi, xtol=1e-15, rtol=1e-15)
+    def f(x):
+        return np.cos(x) + 1.0 / np.cosh(x)
+
+    return np.array([brentq(f, (n - 1) * np.pi + 1e-9 if n > 1 else 0.5, n * np.pi,
+                            xtol=1e-15, rtol=1e-15)
                      for n in range(1, n_modes + 1)])
 
 

@@ -103,7 +103,8 @@ def format_summary(s: dict) -> str:
              f"{s['fit_levels'][0]}-{s['fit_levels'][-1]} fitted, "
              f"{', '.join(map(str, s['held_out_levels']))} held out (measured data: {s['data']})",
              f"1. updated FE model (no cause): chi2 {b['chi2']:.1f}, fit test p = "
-             f"{b['fit_test']['p_value']:.2g}; at the held-out levels {_errors(b['held_out']['levels'])}",
+             f"{b['fit_test']['p_value']:.2g}; at the held-out levels "
+             f"{_errors(b['held_out']['levels'])}",
              f"2. what it gets wrong: {s['tie']['text']}",
              f"3. cause: {s['cause']}" + (f" + {', '.join(s['also'])}" if s["also"] else "")
              + (" (no candidate brings the data within their noise)" if s["unexplained"] else ""),

@@ -130,7 +130,8 @@ def case_modes(model, n_modes: int):
         raise ValueError(f"number of modes must be >= 1, got {n_modes}")
     n_free = getattr(model, "n_free", None)
     if n_free is not None and n_modes > n_free:
-        raise ValueError(f"the model has only {n_free} degrees of freedom, asked for {n_modes} modes")
+        raise ValueError(f"the model has only {n_free} degrees of freedom, "
+                         f"asked for {n_modes} modes")
     omega, shapes = model.modes(n_modes)
     omega = np.asarray(omega, dtype=float)
     shapes = np.asarray(shapes)

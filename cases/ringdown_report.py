@@ -3,9 +3,10 @@
 :func:`ringdown_report` runs :func:`cases.ringdown_study.simulate_ringdown` (the record,
 written as it is computed), :func:`cases.ringdown_routes.identify_record` (the record
 identified as a measured one, ``identified.csv``),
-:func:`cases.ringdown_routes.compare_ringdown` (EPMC and the response-controlled virtual test; the virtual test's campaign stored in
-the output folder, resumable) and draws ``ringdown.png`` (:mod:`viz.backbone_plot`);
-``comparison.json`` is written last. SI units: m, Hz.
+:func:`cases.ringdown_routes.compare_ringdown` (EPMC and the response-controlled virtual
+test; the virtual test's campaign stored in the output folder, resumable) and draws
+``ringdown.png`` (:mod:`viz.backbone_plot`); ``comparison.json`` is written last. SI
+units: m, Hz.
 """
 from __future__ import annotations
 

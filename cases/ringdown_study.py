@@ -152,11 +152,14 @@ def simulate_ringdown(case, settings: RingdownSettings, out: Path | None = None,
     state, start = _start_state(case, settings, dt)
     outputs = model.basis[[case.drive_dof, case.response_dof]]
     points = ("drive", "response")
-    on_chunk = None
     if out is not None:
         path = Path(out) / RECORD_FILE
         write_record_header(path, points)
-        on_chunk = lambda t, y, s: append_record_rows(path, t, y)  # noqa: E731
+
+        def on_chunk(t, y, s):
+            return append_record_rows(path, t, y)
+    else:
+        on_chunk = None
     t0 = time.perf_counter()
     rec = ring_down(model, case.bank, state, w0, settings.cycles, outputs, points,
                     settings.steps_per_period, progress=progress, on_chunk=on_chunk,

@@ -155,7 +155,8 @@ def frame_mass(length, mass_per_length) -> np.ndarray:
                    [-13.0, -3.0, -22.0, 4.0]])
     p = np.array([0, 1, 0, 1])
     ib_, jb_ = np.ix_([1, 2, 4, 5], [1, 2, 4, 5])
-    M[:, ib_, jb_] = (mL / 420.0)[:, None, None] * mb * L[:, None, None] ** (p[:, None] + p[None, :])
+    M[:, ib_, jb_] = ((mL / 420.0)[:, None, None] * mb
+                      * L[:, None, None] ** (p[:, None] + p[None, :]))
     return M
 
 

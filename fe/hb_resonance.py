@@ -105,7 +105,10 @@ class _Balance:
     def __init__(self, model: ReducedModel, joints, load, forces, scale, elements):
         M, K, C = model.M, model.K, model.C
         r = model.n_reduced
-        off = lambda A: np.abs(A - np.diag(np.diag(A))).max()  # noqa: E731
+
+        def off(A):
+            return np.abs(A - np.diag(np.diag(A))).max()
+
         if (off(M) > 1e-12 or off(K) > 1e-9 * np.abs(np.diag(K)).max()
                 or off(C) > 1e-9 * max(np.abs(np.diag(C)).max(), 1e-300)
                 or np.abs(np.diag(M) - 1.0).max() > 1e-10):

@@ -176,8 +176,10 @@ def _bracketed(model, joints, load, A, c, k, scale, elements, tol, F, max_steps=
     (:func:`fe.hb_resonance.resonance_levels`, robust in deep macro slip) with ``ln F``
     found by the secant method, bisecting a bracket where the secant leaves it
     (``|x|`` at resonance rises with ``F``)."""
-    solve = lambda F, g: resonance_levels(model, joints, load, F, k, scale=scale,  # noqa: E731
-                                          elements=elements, guess=g)
+    def solve(F, g):
+        return resonance_levels(model, joints, load, F, k, scale=scale,
+                                elements=elements, guess=g)
+
     res = solve(F, None)
     lo, hi = np.full(A.size, -np.inf), np.full(A.size, np.inf)
     slope, prev = np.ones(A.size), None

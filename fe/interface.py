@@ -15,9 +15,9 @@ the tangential slip of the upper strip over the lower one is::
 (identical to ``(u_up - (h/2) phi_up) - (u_lo + (h/2) phi_lo)`` written with the
 opposite rotation sign ``phi = -dw/dx``), and the normal gap is ``w_up - w_lo``.
 Two identical strips split a motion exactly into an in-phase and an out-of-phase part
-(:func:`stacked_energy_split`). The FE model builds its joint rows from (2) (:func:`tangential_slip_rows`), the renders
-draw the fibres of (1) (:mod:`viz.slab`): the step between the drawn interface fibres
-is the model's slip.
+(:func:`stacked_energy_split`). The FE model builds its joint rows from (2)
+(:func:`tangential_slip_rows`), the renders draw the fibres of (1) (:mod:`viz.slab`): the
+step between the drawn interface fibres is the model's slip.
 """
 from __future__ import annotations
 

@@ -173,7 +173,8 @@ def frf_modal(omega, omega_n, shapes, drive, response, zeta=None, proportional=N
     scalar = d.ndim == 0
     d, r = np.atleast_1d(d), np.atleast_1d(r)
     participation = shapes[r, :] * shapes[d, :]  # (n_pairs, n_modes)
-    denom = (omega_n**2)[None, :] - (omega**2)[:, None] + 2j * (z * omega_n)[None, :] * omega[:, None]
+    denom = ((omega_n**2)[None, :] - (omega**2)[:, None]
+             + 2j * (z * omega_n)[None, :] * omega[:, None])
     H = (1.0 / denom) @ participation.T  # (n_freq, n_pairs)
     return H[:, 0] if scalar else H
 

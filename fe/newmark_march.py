@@ -189,8 +189,8 @@ def _compile(kernel_stamp):
             # predictor: the last joint force
             for j in range(nj):
                 acc = 0.0
-                for l in range(nj):
-                    acc += Z[j, l] * g_old[l]
+                for other in range(nj):
+                    acc += Z[j, other] * g_old[other]
                 s[j] = s_lin[j] - cz * acc
             converged = False
             for _ in range(max_iter):
@@ -202,8 +202,8 @@ def _compile(kernel_stamp):
                 hmax = 0.0
                 for j in range(nj):
                     acc = 0.0
-                    for l in range(nj):
-                        acc += Z[j, l] * g[l]
+                    for other in range(nj):
+                        acc += Z[j, other] * g[other]
                     h[j] = s[j] - s_lin[j] + cz * acc
                     smax = max(smax, abs(s[j]))
                     hmax = max(hmax, abs(h[j]))
@@ -211,8 +211,8 @@ def _compile(kernel_stamp):
                     converged = True
                     break
                 for j in range(nj):
-                    for l in range(nj):
-                        J[j, l] = cz * Z[j, l] * (kt[l] - K_T[l])
+                    for other in range(nj):
+                        J[j, other] = cz * Z[j, other] * (kt[other] - K_T[other])
                     J[j, j] += 1.0
                 if not _solve_in_place(J, h):
                     break

@@ -91,7 +91,8 @@ def interface_rows(upper: DofMap, lower: DofMap, nodes_up, nodes_lo, n_dofs: int
     return coupling_rows(dofs, [1.0, float(lever_up), -1.0, float(lever_lo)], n_dofs)
 
 
-_PAIR_KINDS = {"in_phase_bending": "in-phase bending", "out_of_phase_bending": "out-of-phase bending",
+_PAIR_KINDS = {"in_phase_bending": "in-phase bending",
+               "out_of_phase_bending": "out-of-phase bending",
                "in_phase_axial": "axial", "out_of_phase_axial": "out-of-phase axial"}
 
 

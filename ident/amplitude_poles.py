@@ -37,9 +37,9 @@ linear parameters counted (as :mod:`ident.pole_uncertainty`), so ``omega2_std`` 
 The slopes are kept only when they lower the misfit significantly (an F-test of the
 nested fits at :data:`SLOPE_F_LEVEL`, as the pseudo-modes of :mod:`ident.refine`): a
 band too narrow to see the amplitude change, or a linear mode, keeps the linear fit
-(``tests/test_amplitude_poles.py``). A level whose band holds a resonance the series leaves out keeps its linear fit
-(:func:`ident.series.identify_series`): the slopes would take it for an amplitude
-dependence. Response control holds the amplitude over the
+(``tests/test_amplitude_poles.py``). A level whose band holds a resonance the series leaves
+out keeps its linear fit (:func:`ident.series.identify_series`): the slopes would take it
+for an amplitude dependence. Response control holds the amplitude over the
 band, random excitation averages it: neither is refitted.
 """
 from __future__ import annotations

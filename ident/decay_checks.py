@@ -2,14 +2,14 @@
 
 * Clipped (:func:`clipping`): flat tops (:func:`flat_tops`, digital clipping: three or
   more equal samples at the largest magnitude), or, with noise on the flat tops, the
-  record's own peaks falling short of the band-passed envelope. Unclipped, each half cycle's largest magnitude equals the envelope of the
-  mode (up to the joint's weak harmonics and the noise); a clipped sine keeps a
-  fundamental above its clip level (``(2/pi)(arcsin c + c sqrt(1-c^2))`` of the
-  unclipped amplitude: 0.987 at ``c`` = 0.95, 0.896 at 0.8), so its peaks fall
-  ``1 - c / a1`` (3.7 %, 11 %) short. Three half cycles short by more than
-  :data:`CLIP_DEFICIT`, plus what sampling alone takes off a crest (up to half a sample
-  away: ``1 - cos(pi / (2 n))`` with ``n`` samples per half cycle, 11 % at 6.7 samples
-  per cycle), plus 3 noise standard deviations are named (only half cycles
+  record's own peaks falling short of the band-passed envelope. Unclipped, each half cycle's
+  largest magnitude equals the envelope of the mode (up to the joint's weak harmonics and
+  the noise); a clipped sine keeps a fundamental above its clip level
+  (``(2/pi)(arcsin c + c sqrt(1-c^2))`` of the unclipped amplitude: 0.987 at ``c`` = 0.95,
+  0.896 at 0.8), so its peaks fall ``1 - c / a1`` (3.7 %, 11 %) short. Three half cycles
+  short by more than :data:`CLIP_DEFICIT`, plus what sampling alone takes off a crest (up to
+  half a sample away: ``1 - cos(pi / (2 n))`` with ``n`` samples per half cycle, 11 % at 6.7
+  samples per cycle), plus 3 noise standard deviations are named (only half cycles
   whose envelope is above :data:`TOP_SHARE` of its largest value, after the band-pass
   start-up: the Hilbert end effects of the faint tail are not judged).
 * Noise (:func:`noise_variance_in_band`): the level of the Welch power spectral density

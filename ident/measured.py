@@ -21,10 +21,10 @@ name, for a rule about a whole row the column the rule is about: ``level`` for a
 duplicate (mode, level), ``excitation`` for a non-increasing excitation, ``mode`` for
 too few levels). Repeats (rows sharing (mode, level) with different ``run_order``) are
 legal: the same level measured again; they count once toward the level count, and every
-row of a level must exceed (in the held amplitude) every row of the level below. Blank lines are skipped. Beyond the spec the reader also rejects an
-empty file, duplicated or empty header names, rows whose field count differs from the
-header, a non-integer or < 1 ``level``, non-integer ``mode``/``run_order``, and a mode
-whose rows mix both controls.
+row of a level must exceed (in the held amplitude) every row of the level below. Blank lines
+are skipped. Beyond the spec the reader also rejects an empty file, duplicated or empty
+header names, rows whose field count differs from the header, a non-integer or < 1
+``level``, non-integer ``mode``/``run_order``, and a mode whose rows mix both controls.
 
 Response control (``control = response``): each level held a constant response
 amplitude, so ``response_amplitude`` is required and must increase with ``level``; the
@@ -366,7 +366,8 @@ def write_measured(path, data: MeasuredData) -> None:
 
 def summary(data: MeasuredData) -> str:
     """Human-readable table: per mode, levels, excitation range, f_n and zeta ranges."""
-    out = [f"{data.source or '<memory>'}: {len(data)} rows, modes {', '.join(map(str, data.modes))}"]
+    out = [f"{data.source or '<memory>'}: {len(data)} rows, "
+           f"modes {', '.join(map(str, data.modes))}"]
     for m in data.modes:
         d = data.for_mode(m)
         f = d.omega_hz

@@ -126,7 +126,8 @@ def series_table(fits) -> MeasuredData:
     n_levels = {lab: int(np.sum(labels == lab)) for lab in set(labels.tolist())}
     if len(fits) >= MIN_LEVELS and max(n_levels.values()) < MIN_LEVELS:
         tracks = "; ".join(
-            f"mode {lab}: " + ", ".join(f"level {level_of[k]} {fits[k].result.modes[i].frequency_hz:.5g} Hz"
+            f"mode {lab}: " + ", ".join(f"level {level_of[k]} "
+                                        f"{fits[k].result.modes[i].frequency_hz:.5g} Hz"
                                         for k, i, lb, _ in rows if lb == lab)
             for lab in sorted(n_levels))
         raise InputError(f"no mode could be followed over {MIN_LEVELS} of the {len(fits)} "

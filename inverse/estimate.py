@@ -208,7 +208,8 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
         if amplitude is not None:
             amp = np.asarray(amplitude, dtype=float).ravel()
             if amp.shape != levels.shape or np.any(~(amp > 0)):
-                raise InputError(f"amplitude must hold {levels.size} positive values, one per level")
+                raise InputError(f"amplitude must hold {levels.size} positive values, "
+                                 "one per level")
             abscissa = "amplitude (supplied)"
         elif d.response_amplitude is not None:
             amp = d.response_amplitude
@@ -285,8 +286,9 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
     # constant-ratio summary (paper eq. 35)
     ratios = r[pair_to][good] / r[pair_from][good]
     z = float(np.exp(np.mean(np.log(ratios))))
-    const = bool(np.allclose(ratios, z, rtol=1e-9) and np.allclose(np.log(r[pair_from][good]) / np.log(z),
-                 np.round(np.log(r[pair_from][good]) / np.log(z)), atol=1e-9))
+    const = bool(np.allclose(ratios, z, rtol=1e-9)
+                 and np.allclose(np.log(r[pair_from][good]) / np.log(z),
+                                 np.round(np.log(r[pair_from][good]) / np.log(z)), atol=1e-9))
     ratio_z = z if const else None
     a0 = (math.log((z ** fitres.p - 1.0) * fitres.kappa1_B) / math.log(z)) if const else None
 
@@ -317,7 +319,8 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
         warnings.append(bad)
 
     chi_iv = fitres.interval(lambda p, k: p - 1.0, confidence)
-    k1b_iv = fitres.interval(lambda p, k: math.exp(k) / p if p > 0 else math.nan, confidence, log=True)
+    k1b_iv = fitres.interval(lambda p, k: math.exp(k) / p if p > 0 else math.nan, confidence,
+                             log=True)
 
     # ------------------------------------------------------------ model: B~ and R~
     case_res, B, R, R_iv = None, None, None, None
@@ -331,7 +334,8 @@ def estimate(data, fit_levels=None, method: str = "paper", mode=None, model=None
         R = r_tilde(fitres.kappa1_B, fitres.chi, B)
 
         def ln_r(p, k):
-            return k - math.log(p) - math.log(kappa1_per_R(p - 1.0)) - math.log(case_res.B_of_chi(p - 1.0))
+            return (k - math.log(p) - math.log(kappa1_per_R(p - 1.0))
+                    - math.log(case_res.B_of_chi(p - 1.0)))
 
         if fitres.cov is not None:
             se = float(fitres.std_error(ln_r))

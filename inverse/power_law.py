@@ -98,8 +98,10 @@ class PowerLawFit:
 
     def gradient(self, fun, h: float = 1e-6) -> np.ndarray:
         """Central-difference gradient of ``fun(p, ln_kt)`` (scalar or array)."""
-        gp = (np.asarray(fun(self.p + h, self.ln_kt)) - np.asarray(fun(self.p - h, self.ln_kt))) / (2 * h)
-        gk = (np.asarray(fun(self.p, self.ln_kt + h)) - np.asarray(fun(self.p, self.ln_kt - h))) / (2 * h)
+        gp = (np.asarray(fun(self.p + h, self.ln_kt))
+              - np.asarray(fun(self.p - h, self.ln_kt))) / (2 * h)
+        gk = (np.asarray(fun(self.p, self.ln_kt + h))
+              - np.asarray(fun(self.p, self.ln_kt - h))) / (2 * h)
         return np.stack([gp, gk], axis=-1)
 
     def std_error(self, fun) -> np.ndarray:

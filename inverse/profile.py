@@ -13,10 +13,11 @@ A parameter is *determined* when its interval closes on both sides inside the gr
 under the threshold over the whole grid (e.g. the glue stiffness of a joint that never
 leaves micro-slip), *failed* when a fit of the profile failed before its side closed
 (counted in ``failed_points``; never read as "open"). At a bound of the parameter
-(:func:`bounded_interval`) that side of the interval is the bound itself. The grid branches (one per parameter and direction) are independent
-tasks of :func:`runs.executor.run_sweep`; with a ``store`` (directory, digest of the
-problem) every finished branch is written there as it finishes (``branch_<hash>.json``,
-atomically) and a rerun of the same problem loads it instead of recomputing.
+(:func:`bounded_interval`) that side of the interval is the bound itself. The grid branches
+(one per parameter and direction) are independent tasks of :func:`runs.executor.run_sweep`;
+with a ``store`` (directory, digest of the problem) every finished branch is written there
+as it finishes (``branch_<hash>.json``, atomically) and a rerun of the same problem loads it
+instead of recomputing.
 """
 from __future__ import annotations
 
@@ -155,8 +156,11 @@ def linear_grid(best: Fit, name: str, param, n: int = 6, width: float = 3.0):
     down = [max(x - o, param.lower) for o in offs]
     up = [min(x + o, param.upper) for o in offs]
     tiny = 1e-6 * param.step          # a branch starting on a bound has no points
-    dedup = lambda v: [a for i, a in enumerate(v)  # noqa: E731
-                       if abs(a - x) > tiny and a not in v[:i]]
+
+    def dedup(v):
+        return [a for i, a in enumerate(v)
+                if abs(a - x) > tiny and a not in v[:i]]
+
     return dedup(down), dedup(up)
 
 

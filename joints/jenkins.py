@@ -122,8 +122,9 @@ def discretize_log(p: IwanParameters, a_low: float,
     :func:`joints.iwan.dissipation_per_cycle` and
     :func:`joints.describing.describing_function`, amplitudes ``A`` from 1e-3
     ``phi_max`` to ``phi_max`` with ``a_low = 2**-6 1e-3 phi_max``, chi from -0.9 to
-    -0.1, beta = 0 and 4; ``tests/test_jenkins.py``): the largest relative error of the dissipation per cycle and of the in-phase stiffness
-    loss ``K_T - k_in`` is 3.9e-3 / 7.4e-4 with 8 sliders per octave, 9.9e-4 / 1.7e-4
+    -0.1, beta = 0 and 4; ``tests/test_jenkins.py``): the largest relative error of the
+    dissipation per cycle and of the in-phase stiffness loss ``K_T - k_in`` is
+    3.9e-3 / 7.4e-4 with 8 sliders per octave, 9.9e-4 / 1.7e-4
     with 16 (6.3e-4 / 7.4e-5 at chi = -0.5; 257 sliders) and 2.4e-4 / 8.1e-5 with 32:
     second order in the cell width for chi >= -0.5, larger for chi near 0 (near chi =
     -1 the one slider below ``a_low`` holds a large share, (a_low/phi_max)**(chi+1), and

@@ -329,8 +329,8 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
     bar = None
     if progress and todo and spec.kind == "serial":
         from tqdm import tqdm
-        bar = tqdm(total=len(todo) * n_lines, unit="line", desc=f"{campaign.protocol.name} campaign",
-                   leave=False)
+        bar = tqdm(total=len(todo) * n_lines, unit="line",
+                   desc=f"{campaign.protocol.name} campaign", leave=False)
     try:
         if spec.kind == "serial":       # one tick per line
             def func(level, shared):

@@ -5,8 +5,8 @@ loaded 2-core machine makes them 30-400x slower, so the suite runs BLAS on one t
 This must happen before numpy is imported.
 
 The paper's figures as transcribed by the project's hosts (``shared/data/paper``) sit
-beside the checkout (in a folder above it); ``IWANFE_SHARED`` points elsewhere. The tests that compare the
-shipped transcription with them skip where they are absent.
+beside the checkout (in a folder above it); ``IWANFE_SHARED`` points elsewhere. The tests
+that compare the shipped transcription with them skip where they are absent.
 """
 import os
 from pathlib import Path

@@ -61,7 +61,9 @@ def rayleigh_truth(rms):
     out = []
     for s in rms:
         def expect(f):       # weight u e^-u du, A = s sqrt(2u); below a[0]: f(a[0])
-            g = lambda u: u * math.exp(-u) * float(f(max(la[0], math.log(s * math.sqrt(2 * u)))))
+            def g(u):
+                return u * math.exp(-u) * float(f(max(la[0], math.log(s * math.sqrt(2 * u)))))
+
             return integrate.quad(g, 0.0, 40.0, epsrel=1e-10, limit=200)[0]
         e_o2, e_kq = expect(o2), expect(kq)
         out.append((e_o2, e_kq / (2 * e_o2)))

@@ -68,7 +68,8 @@ def measured_seeds() -> list[bytes]:
 
 def frf_set(n_lines: int = 24, n_points: int = 2) -> FRFSet:
     """A small 2-mode receptance set (deterministic)."""
-    f = np.linspace(40.0, 60.0, n_lines) if n_lines < 40 else np.arange(40.0, 40.0 + 0.5 * n_lines, 0.5)
+    f = (np.linspace(40.0, 60.0, n_lines) if n_lines < 40
+         else np.arange(40.0, 40.0 + 0.5 * n_lines, 0.5))
     w = 2 * np.pi * f[:, None]
     wn = 2 * np.pi * np.array([45.0, 55.0])
     phi = np.array([[1.0, 0.7], [0.6, -0.9]])[:n_points]

@@ -31,7 +31,8 @@ def _backbone(rng, strength):
 
 def _at(law, a):
     s = a / law["a0"]
-    return law["w0"] ** 2 * (1 - law["kappa"] * s ** law["p"]), law["z0"] + law["eta"] * s ** law["q"]
+    return (law["w0"] ** 2 * (1 - law["kappa"] * s ** law["p"]),
+            law["z0"] + law["eta"] * s ** law["q"])
 
 
 def _amplitude(law, w, force):

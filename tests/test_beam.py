@@ -38,13 +38,16 @@ def test_matrices_match_gauss_quadrature_of_shape_functions():
         N, d2 = hermite(xi, Le)
         Kq = SEC.EI * Le * (d2 * wg) @ d2.T
         Mq = SEC.mass_per_length * Le * (N * wg) @ N.T
-        np.testing.assert_allclose(K[e][np.ix_(bend, bend)], Kq, rtol=1e-12, atol=1e-9 * np.abs(Kq).max())
-        np.testing.assert_allclose(M[e][np.ix_(bend, bend)], Mq, rtol=1e-12, atol=1e-12 * np.abs(Mq).max())
+        np.testing.assert_allclose(K[e][np.ix_(bend, bend)], Kq, rtol=1e-12,
+                                   atol=1e-9 * np.abs(Kq).max())
+        np.testing.assert_allclose(M[e][np.ix_(bend, bend)], Mq, rtol=1e-12,
+                                   atol=1e-12 * np.abs(Mq).max())
         # axial: linear shape functions
         Na = np.array([1 - xi, xi])
         Maq = SEC.mass_per_length * Le * (Na * wg) @ Na.T
         np.testing.assert_allclose(M[e][np.ix_([0, 3], [0, 3])], Maq, rtol=1e-12)
-        np.testing.assert_allclose(K[e][np.ix_([0, 3], [0, 3])], SEC.EA / Le * np.array([[1, -1], [-1, 1]]))
+        np.testing.assert_allclose(K[e][np.ix_([0, 3], [0, 3])],
+                                   SEC.EA / Le * np.array([[1, -1], [-1, 1]]))
         # no axial-bending coupling
         assert np.all(K[e][np.ix_([0, 3], bend)] == 0) and np.all(M[e][np.ix_([0, 3], bend)] == 0)
 

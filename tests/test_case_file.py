@@ -303,8 +303,8 @@ def test_two_parameter_calibration_recovers_a_planted_truth_on_a_fine_mesh(tmp_p
 
 def test_air_drag_integral_counts_a_lap_once():
     """``lambda3 = int b |w|^3 dx`` over the projected area: on the lap cantilever (normal
-    tied by a penalty, so both strips share ``w`` there to 1e-7) it is the two strips' integrals less the
-    narrower strip's over the lap, evaluated here strip by strip."""
+    tied by a penalty, so both strips share ``w`` there to 1e-7) it is the two strips'
+    integrals less the narrower strip's over the lap, evaluated here strip by strip."""
     from cases.casefile.levels import _lambda3
 
     cf = read_case_file("docs/case-files/bolted-lap-cantilever.toml")

@@ -35,7 +35,8 @@ BAD = [
     (_edit('beams = ["lower", "upper"]', 'beams = ["lower", "middle"]'), "[interface.0]", "beams"),
     (_edit("x = [0.240, 0.300]\nnormal", "x = [0.240, 0.350]\nnormal"), "[interface.0]", "x"),
     (_edit('normal = "tied"', 'normal = "glued"'), "[interface.0]", "normal"),
-    (_edit("joints_at = [0.255, 0.285]", "joints_at = [0.255, 0.385]"), "[interface.0]", "joints_at"),
+    (_edit("joints_at = [0.255, 0.285]", "joints_at = [0.255, 0.385]"),
+     "[interface.0]", "joints_at"),
     (_edit("joints_at = [0.255, 0.285]", "joints_at = [0.255, 0.285]\njoint_elements = 3"),
      "[interface.0]", "joints_at"),
     (_edit("kt = 1.0e7\n", ""), "[interface.0]", "kt"),
@@ -63,7 +64,8 @@ BAD = [
 ]
 
 
-@pytest.mark.parametrize("text, table, key", BAD, ids=[f"{t}{k}-{i}" for i, (_, t, k) in enumerate(BAD)])
+@pytest.mark.parametrize("text, table, key", BAD,
+                         ids=[f"{t}{k}-{i}" for i, (_, t, k) in enumerate(BAD)])
 def test_bad_case_file_is_one_line_naming_table_and_key(tmp_path, capsys, text, table, key):
     path = tmp_path / "bad.toml"
     path.write_text(text)

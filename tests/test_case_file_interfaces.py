@@ -201,7 +201,8 @@ def test_tied_lap_converges_under_mesh_refinement(tmp_path):
     within 1e-5 of 0.5 mm. With the rotation tie a fixed stiffness per unit length its 70
     um boundary layer was resolved more and more: 213.9448, 213.9439, 213.9422, 213.9384
     Hz, growing steps."""
-    f1 = np.array([f[f > 1.0][0] for f in _bolted_lap(tmp_path, "tied", [0.004, 0.002, 0.001, 0.0005])])
+    f1 = np.array([f[f > 1.0][0]
+                   for f in _bolted_lap(tmp_path, "tied", [0.004, 0.002, 0.001, 0.0005])])
     steps = np.abs(np.diff(f1))
     assert np.all(steps[1:] < 0.7 * steps[:-1]), f1
     np.testing.assert_allclose(f1[0], f1[-1], rtol=1e-5)
@@ -253,8 +254,9 @@ element_size = 0.005
 def test_very_stiff_glue_gives_the_stiff_limit_or_one_line_naming_kt(tmp_path):
     """An outside user's glued steel stack: kt = 1e16 N/m failed with a bare Cholesky
     error (484-th leading minor). Truth: the stiff limit, which kt = 1e15 reaches to 1e-6
-    (the frequencies move as the glue-slip share, 1e-7 at 1e15, which falls as 1/kt); kt = 1e18 (a joint element 7e7 times the stiffest
-    strip element) is refused in one line naming [interface.0] kt."""
+    (the frequencies move as the glue-slip share, 1e-7 at 1e15, which falls as 1/kt); kt =
+    1e18 (a joint element 7e7 times the stiffest strip element) is refused in one line
+    naming [interface.0] kt."""
     def modes(kt):
         p = tmp_path / f"glued-{kt:g}.toml"
         p.write_text(GLUED_STACK.format(kt=kt))

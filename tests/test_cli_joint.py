@@ -26,7 +26,10 @@ def iwanfe(*args):
 def fourier_stiffness(p, A):
     """(k_in, k_quad) by quadrature of the loading branch -B(A) + 2 B((u+A)/2)."""
     FA = float(backbone(p, A))
-    f = lambda t: float(-FA + 2 * backbone(p, 0.5 * (A * math.sin(t) + A)))
+
+    def f(t):
+        return float(-FA + 2 * backbone(p, 0.5 * (A * math.sin(t) + A)))
+
     pts = [math.asin(2 * p.phi_max / A - 1)] if A > p.phi_max else None
     opts = dict(points=pts, epsabs=0.0, epsrel=1e-13, limit=200)
     with warnings.catch_warnings():
@@ -92,7 +95,8 @@ def test_table_and_plot(tmp_path):
     (["--chi", CHI, "--kt", "abc", "--fs", FS, "--beta", BETA], "--kt: invalid float value: 'abc'"),
     (["--chi", CHI, "--kt", KT, "--fs", FS, "--beta", BETA, "--amplitude", 1e-3, -2e-3],
      "--amplitude -0.002: must be a finite number > 0"),
-    (["--chi", "nan", "--kt", KT, "--fs", FS, "--beta", BETA], "--chi nan: must be a finite number"),
+    (["--chi", "nan", "--kt", KT, "--fs", FS, "--beta", BETA],
+     "--chi nan: must be a finite number"),
 ])
 def test_bad_input_one_line_exit_2(args, text):
     out = iwanfe(*args)

@@ -132,7 +132,10 @@ def test_a_rise_of_six_sd_is_stated_with_known_noise_not_with_a_two_dof_estimate
     known = NoiseLevels(sd_w, sd_z, "identification")
     two = NoiseLevels(sd_w, sd_z, "scatter about a smooth curve", 2.0, 2.0)
     many = NoiseLevels(sd_w, sd_z, "repeats", 200.0, 200.0)
-    kinds = lambda s: [c.kind for c in iwan_contradictions(d, None, s)]  # noqa: E731
+
+    def kinds(s):
+        return [c.kind for c in iwan_contradictions(d, None, s)]
+
     assert "frequency-rises" in kinds(known) and "frequency-rises" in kinds(many)
     assert "frequency-rises" not in kinds(two)
 

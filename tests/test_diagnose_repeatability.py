@@ -202,10 +202,10 @@ def test_the_lenient_test_adds_no_distortion_to_rows_identified_at_their_peak():
 def test_a_damping_drift_in_run_order_is_not_taken_for_the_rig_scatter():
     """A damping that cycles by +-40-70 % (drawn; a full cycle, which no run-order term
     of the noise model follows) through a shuffled run order, no repeats: the scatter
-    about a smooth curve in amplitude is several times what a rig repeats. Judged against the assumed rig repeatability (capped), the diagnosis does
-    not answer ``none`` (no cause of the catalogue drifts the damping with time); it
-    states what the verdict would be with the data's own scatter as the noise. The same
-    series without the drift is not capped."""
+    about a smooth curve in amplitude is several times what a rig repeats. Judged against
+    the assumed rig repeatability (capped), the diagnosis does not answer ``none`` (no cause
+    of the catalogue drifts the damping with time); it states what the verdict would be with
+    the data's own scatter as the noise. The same series without the drift is not capped."""
     rng = np.random.default_rng(2024)
     verdicts, capped_plain = [], []
     for seed in range(5):

@@ -14,7 +14,8 @@ from cases.double_beam.model import DoubleBeamConfig, build_double_beam
 from fe.interface import StripGeometry
 
 BARE = DoubleBeamConfig(exciter_mass=0.0, sensor_mass=0.0, glue_sensors=False, clamp_length=0.0)
-BETA_L = np.array([1.875104068711961, 4.694091132974175, 7.854757438237613, 10.99554073487547])  # Blevins
+BETA_L = np.array([1.875104068711961, 4.694091132974175, 7.854757438237613,
+                   10.99554073487547])  # Blevins
 
 
 def clamped_tip_spring_beta_l(n_modes, k_ratio):
@@ -52,7 +53,8 @@ def test_point_glue_at_tip_equals_tip_rotational_spring(k_glue):
     Derivation: strips clamped at x = 0 carry axial forces +-N, tip slip
     s = 2 N L / EA + h theta(L), glue force N = -k s, so the couple |N| h = k_r theta(L).
     """
-    model = build_double_beam(replace(BARE, glue_tangential_stiffness=0.0, element_size=0.0025, n_joints=9))
+    model = build_double_beam(replace(BARE, glue_tangential_stiffness=0.0, element_size=0.0025,
+                                      n_joints=9))
     g_tip = model.slip_matrix[[-1], :]
     K = model.K_without_joints + k_glue * (g_tip.T @ g_tip)
     from fe.modal import normal_modes
@@ -78,7 +80,8 @@ def test_slip_convention_and_joint_shares():
     assert abs(diff).max() <= 1e-9 * abs(model.K).max()
     assert k.sum() == pytest.approx(cfg.K_T, rel=1e-12)
     np.testing.assert_allclose(k / k.max(), [0.5, 1, 1, 1, 0.5])
-    np.testing.assert_allclose(model.joint_x, np.linspace(cfg.free_length - 0.02, cfg.free_length, 5))
+    np.testing.assert_allclose(model.joint_x,
+                               np.linspace(cfg.free_length - 0.02, cfg.free_length, 5))
     assert S.shape == (5, model.n_free)
     # both strips rotate rigidly about the clamp by theta: fibres at the interface of the
     # upper strip (zeta = -h/2) move by +h/2 theta, those of the lower (zeta = +h/2) by
@@ -185,13 +188,15 @@ def test_interface_attributes_and_strip_displacements():
     e[model.drive_dof] = 1.0
     dd = model.strip_displacements(e)
     i = model.mesh.node_at(model.config.drive_x)
-    assert dd[0]["w"][i] == 1.0 and np.count_nonzero(np.concatenate([v for s in dd for v in s.values()])) == 1
+    assert (dd[0]["w"][i] == 1.0
+            and np.count_nonzero(np.concatenate([v for s in dd for v in s.values()])) == 1)
     e[:] = 0
     e[model.response_dof] = 1.0
     assert model.strip_displacements(e)[1]["w"][i] == 1.0
     # strip mass + attachments = total mass seen by a rigid vertical translation (no clamp)
     cfg = model.config
-    expected = 2 * cfg.rho * cfg.width * cfg.thickness * cfg.free_length + cfg.exciter_mass + 3 * cfg.sensor_mass
+    expected = (2 * cfg.rho * cfg.width * cfg.thickness * cfg.free_length + cfg.exciter_mass
+                + 3 * cfg.sensor_mass)
     full_M = model._strip_mass
     ones = np.zeros(full_M.shape[0])
     ones[1::3] = 1.0

@@ -24,7 +24,8 @@ def sdof(p: IwanParameters, m: float, c: float = 0.0) -> ReducedModel:
 def random_joint(seed):
     rng = np.random.default_rng(seed)
     return (IwanParameters(chi=rng.uniform(-0.9, -0.1), K_T=10 ** rng.uniform(4, 8),
-                           F_S=10 ** rng.uniform(1, 3), beta=rng.choice([0.0, rng.uniform(0.1, 5)])),
+                           F_S=10 ** rng.uniform(1, 3),
+                           beta=rng.choice([0.0, rng.uniform(0.1, 5)])),
             10 ** rng.uniform(-1, 1))
 
 

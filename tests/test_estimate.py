@@ -302,23 +302,23 @@ def test_r_recovered_through_fe_model():
     R = 10 ** rng.uniform(4, 6)
     model = lumped_model()
     w, phi = model.modes(3)
-    l = 1  # second mode
+    i_mode = 1  # second mode
     K, M, G = model.K.toarray(), model.M.toarray(), model.slip_matrix.toarray()
     exc = 0.2 * 2.0 ** np.arange(8)
     force_scale = 3.0
-    c_modal = 2 * 0.0128 * w[l]
+    c_modal = 2 * 0.0128 * w[i_mode]
     f = np.zeros(3)
     f[0] = force_scale * exc[0]
     shares = model.joint_stiffness / model.joint_stiffness.sum()
     zeta0 = 0.0128
     for _ in range(60):  # B depends on the level-1 damping, which depends on B
-        x = np.linalg.solve(K * (1 + 2j * zeta0) - w[l] ** 2 * M, f)
+        x = np.linalg.solve(K * (1 + 2j * zeta0) - w[i_mode] ** 2 * M, f)
         A0 = np.abs(G @ x)
-        B = sum(shares[m] * (G[m] @ phi[:, l]) ** 2 * A0[m] ** (chi + 1) for m in range(2))
+        B = sum(shares[m] * (G[m] @ phi[:, i_mode]) ** 2 * A0[m] ** (chi + 1) for m in range(2))
         kB = abs(kappa1(R, chi)) * B
-        data = synthetic(chi, kB, exc, q_exact(chi), omega2_lin=w[l] ** 2, c_modal=c_modal)
+        data = synthetic(chi, kB, exc, q_exact(chi), omega2_lin=w[i_mode] ** 2, c_modal=c_modal)
         zeta0 = data.zeta[0]
-    est = estimate(data, None, "exact", model=model, force_scale=force_scale, fe_mode=l + 1)
+    est = estimate(data, None, "exact", model=model, force_scale=force_scale, fe_mode=i_mode + 1)
     assert est.B == pytest.approx(B, rel=1e-5)
     assert est.R == pytest.approx(R, rel=1e-5)
     assert est.R_interval[0] <= est.R <= est.R_interval[1]
@@ -342,10 +342,10 @@ def test_r_scales_with_force_scale_double_beam():
                                                     rel=0.02)
     # slip amplitudes vs the one-mode approximation |g.phi| |phi_d| F / (2 zeta omega^2)
     w, phi = model.modes(e1.case.fe_mode)
-    l = e1.case.fe_mode - 1
-    g_phi = np.abs(model.slip_matrix @ phi[:, l])
-    one_mode = g_phi * abs(phi[model.drive_dof, l]) * e1.case.reference_force / (
-        2 * data.zeta[0] * w[l] ** 2)
+    i_mode = e1.case.fe_mode - 1
+    g_phi = np.abs(model.slip_matrix @ phi[:, i_mode])
+    one_mode = g_phi * abs(phi[model.drive_dof, i_mode]) * e1.case.reference_force / (
+        2 * data.zeta[0] * w[i_mode] ** 2)
     np.testing.assert_allclose(e1.case.slip_amplitudes, one_mode, rtol=0.01)
 
 

@@ -78,7 +78,8 @@ def test_homogeneity_identities_and_rayleigh_sensitivities(check):
     c = check["candidates"]
     # stiffness: E scales all but K_T; mass: rho scales all but the attachments
     assert c["E"]["log_sensitivity"] + c["glue"]["log_sensitivity"] == pytest.approx(0.5, abs=1e-4)
-    assert c["rho"]["log_sensitivity"] + c["mass"]["log_sensitivity"] == pytest.approx(-0.5, abs=1e-4)
+    assert (c["rho"]["log_sensitivity"] + c["mass"]["log_sensitivity"]
+            == pytest.approx(-0.5, abs=1e-4))
     # Rayleigh quotient of the mode itself (no finite difference): d ln f / d ln K_T is
     # half the glue-slip participation, d ln f / d ln a (attachment masses scaled by a)
     # is -1/2 phi^T M_att phi / phi^T M phi

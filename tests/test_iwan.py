@@ -169,7 +169,10 @@ def test_force_history_memory_rules():
     a, b, c = 0.6 * pm, 0.3 * pm, 0.8 * pm
     u = np.array([a, -b, a, c, -c, 0.1 * pm, -c, -1.5 * pm])
     F = force_history(p, u)
-    B = lambda x: float(backbone(p, x))
+
+    def B(x):
+        return float(backbone(p, x))
+
     assert F[0] == pytest.approx(B(a), rel=1e-14)
     assert F[1] == pytest.approx(B(a) - 2 * B((a + b) / 2), rel=1e-14)
     assert F[2] == pytest.approx(B(a), rel=1e-12)  # inner loop closed at a
@@ -186,7 +189,10 @@ def test_force_history_interior_points_and_plateaus():
     pm = p.phi_max
     u = np.array([0.5, 0.5, 1.0, 0.2, 0.2, -0.4, 0.9, 1.0, 1.2]) * pm
     F = force_history(p, u)
-    B = lambda x: float(backbone(p, x))
+
+    def B(x):
+        return float(backbone(p, x))
+
     assert F[1] == F[0]
     F3 = B(pm) - 2 * B(0.4 * pm)
     assert F[3] == pytest.approx(F3, rel=1e-12) and F[4] == F[3]
@@ -295,7 +301,10 @@ def test_kappas_against_fourier_of_paper_eq10(chi):
     R, A = 3.7e5, 2e-4
     D = R / ((chi + 1) * (chi + 2))
     g1, g2 = D * A ** (chi + 2) * 2.0 ** (-(chi + 1)), D * A ** (chi + 2)
-    dF = lambda t: g1 * (1 + math.sin(t)) ** (chi + 2) - g2
+
+    def dF(t):
+        return g1 * (1 + math.sin(t)) ** (chi + 2) - g2
+
     opts = dict(epsabs=0.0, epsrel=1e-12)
     half = (-math.pi / 2, math.pi / 2)
     a1 = 2 / math.pi * integrate.quad(lambda t: dF(t) * math.cos(t), *half, **opts)[0]
@@ -317,7 +326,10 @@ def test_kappa2_paper_transcription_and_error():
     reproduces the numerical Taylor value."""
     for chi in (-0.9, -0.5, -0.1):
         n = chi + 2
-        f = lambda t: (1 + math.sin(t)) ** n * math.sin(t)
+
+        def f(t):
+            return (1 + math.sin(t)) ** n * math.sin(t)
+
         h = 1e-3
         taylor = 0.0
         for c in (math.pi / 4, -math.pi / 4):

@@ -159,7 +159,8 @@ def documented_order_sum(terms):
     return total + tail
 
 
-@pytest.mark.parametrize("n_sliders", [1, 3, 4, 5, 7, 8, 9, 11, 12, 13, 15, 16, 20, 23, 24, 25, 100, 1031])
+@pytest.mark.parametrize("n_sliders", [1, 3, 4, 5, 7, 8, 9, 11, 12, 13, 15, 16, 20, 23, 24, 25,
+                                       100, 1031])
 def test_sums_follow_the_documented_order_bit_for_bit(n_sliders):
     """The order is fixed by the kernel's IR, not left to the compiler: a numpy replay
     of it gives the same bits (this is what makes every executor, every compilation,

@@ -12,7 +12,8 @@ from fe.modal import frf_direct, frf_modal, modal_damping_ratios, normal_modes
 
 SEC = Section(70e9, 2700.0, 0.05, 1e-3)
 L = 0.35
-BETA_L = np.array([1.875104068711961, 4.694091132974175, 7.854757438237613, 10.99554073487547])  # Blevins
+BETA_L = np.array([1.875104068711961, 4.694091132974175, 7.854757438237613,
+                   10.99554073487547])  # Blevins
 
 
 def cantilever(n_el):
@@ -50,13 +51,15 @@ def test_modes_are_mass_normalized_and_sparse_equals_dense():
     w_dense, p_dense = normal_modes(K, M, 6, dense_below=10**6)
     np.testing.assert_allclose(w_sparse, w_dense, rtol=1e-7)  # dense: ~3e-9 round-off
     np.testing.assert_allclose(p_sparse.T @ (M @ p_sparse), np.eye(6), atol=1e-9)
-    np.testing.assert_allclose(p_sparse.T @ (K @ p_sparse), np.diag(w_sparse**2), rtol=1e-7, atol=1e-9 * w_sparse[-1] ** 2)
+    np.testing.assert_allclose(p_sparse.T @ (K @ p_sparse), np.diag(w_sparse**2), rtol=1e-7,
+                               atol=1e-9 * w_sparse[-1] ** 2)
     np.testing.assert_allclose(np.abs(p_sparse.T @ (M @ p_dense)), np.eye(6), atol=1e-7)
 
 
 def test_modal_damping_ratios_paper_eq28():
     w = np.array([10.0, 100.0])
-    np.testing.assert_allclose(modal_damping_ratios(w, proportional=(2.0, 1e-4)), 2.0 / (2 * w) + 0.5e-4 * w)
+    np.testing.assert_allclose(modal_damping_ratios(w, proportional=(2.0, 1e-4)),
+                               2.0 / (2 * w) + 0.5e-4 * w)
     with pytest.raises(ValueError):
         modal_damping_ratios(w)
 

@@ -43,7 +43,8 @@ def test_energy_balance_closes(lumped, alpha):
     w, N = 2 * np.pi * 61.0, 256
     dt = 2 * np.pi / (w * N)
     e = np.sin(w * dt * np.arange(40 * N + 1))
-    run = integrate(m, bank, m.load(force_vector(p) * 128.0), e, NewmarkSettings(dt=dt, alpha=alpha))
+    run = integrate(m, bank, m.load(force_vector(p) * 128.0), e,
+                    NewmarkSettings(dt=dt, alpha=alpha))
     E = run.energy
     assert E.joint_dissipation > 0.01 * E.input          # joints really slip
     assert E.relative_residual < 1e-3

@@ -61,7 +61,10 @@ def test_static_joint_modes_reproduce_static_joint_compliance():
     enriched = reduced_basis(s, n_modes=3, static_joint_modes=True)
     for m in (trunc, enriched):
         assert m.basis.T @ s.M @ m.basis == pytest.approx(np.eye(m.n_reduced), abs=1e-9)
-    comp = lambda m: m.G @ np.linalg.solve(m.K, m.G.T)
+
+    def comp(m):
+        return m.G @ np.linalg.solve(m.K, m.G.T)
+
     assert np.max(np.abs(comp(trunc) - exact) / np.abs(exact).max()) > 1e-2
     np.testing.assert_allclose(comp(enriched), exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())
     assert enriched.n_reduced == 5
@@ -79,7 +82,8 @@ def test_joint_bank_energy_bookkeeping():
     assert bank.stored_energy(s, new) == pytest.approx(0.5 * np.sum(bank.stiffness * stretch ** 2))
     # a slider that moved by d dissipated k phi d
     moved = np.abs(new - anchor)
-    assert bank.dissipated(anchor, new) == pytest.approx(np.sum(bank.stiffness * bank.slip_limit * moved))
+    assert bank.dissipated(anchor, new) == pytest.approx(
+        np.sum(bank.stiffness * bank.slip_limit * moved))
     with pytest.raises(ValueError):
         JointBank(np.ones((2, 3)), np.ones((2, 4)))
 

@@ -258,7 +258,8 @@ def test_drawn_interface_slip_equals_double_beam_joint_slip():
     for k in range(shapes.shape[1]):
         disp = model.strip_displacements(shapes[:, k])
         fl, fu = slab_fields(lower, disp[0]), slab_fields(upper, disp[1])
-        assert np.allclose(fl.points[:, 0, 1, 2], fu.points[:, 0, 0, 2])  # top of lower = bottom of upper
+        # top of lower = bottom of upper
+        assert np.allclose(fl.points[:, 0, 1, 2], fu.points[:, 0, 0, 2])
         step = fu.displacement[:, 0, 0, 0] - fl.displacement[:, 0, 1, 0]
         node = np.abs(model.joint_x[:, None] - lower.x[None, :]).argmin(axis=1)
         assert np.allclose(lower.x[node], model.joint_x) and np.allclose(upper.x, lower.x)

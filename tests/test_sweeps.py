@@ -165,7 +165,8 @@ def test_describing_function_derivatives():
             np.testing.assert_allclose(k_in, ref_in, rtol=1e-14)
             np.testing.assert_allclose(k_q, ref_q, rtol=1e-14)
             h = 1e-6 * A
-            fd = [(a - b) / (2 * h) for a, b in zip(iwan_describing(J, A + h)[:2], iwan_describing(J, A - h)[:2])]
+            fd = [(a - b) / (2 * h) for a, b in zip(iwan_describing(J, A + h)[:2],
+                                                    iwan_describing(J, A - h)[:2])]
             np.testing.assert_allclose(dk_in, fd[0], rtol=1e-6)
             np.testing.assert_allclose(dk_q, fd[1], rtol=1e-6)
 

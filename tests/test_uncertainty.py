@@ -134,7 +134,8 @@ def test_monte_carlo_interval_agrees_with_delta_method_in_the_linear_regime(sour
         se = (hi - lo) / (2 * t_q)
         mc_lo, mc_hi = np.quantile(v, [0.05, 0.95])
         for got, want in ((mc_lo, lo), (mc_hi, hi)):
-            assert abs(got - want) < 4.5 * q_se * se, (name, i, got, want, (got - want) / (q_se * se))
+            assert abs(got - want) < 4.5 * q_se * se, (name, i, got, want,
+                                                       (got - want) / (q_se * se))
 
 
 # --------------------------------------------------------------------------- sampling

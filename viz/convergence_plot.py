@@ -42,7 +42,8 @@ def plot_convergence(path, element_size, relative_error, mode_labels=None, refer
     if reference_rate is not None:
         ok = np.isfinite(err[:, 0]) & (err[:, 0] > 0)
         h0, e0 = h[ok][0], err[ok, 0][0]
-        ax.loglog(h * 1e3, e0 * (h / h0) ** reference_rate, "k--", lw=1, label=f"h^{reference_rate:g}")
+        ax.loglog(h * 1e3, e0 * (h / h0) ** reference_rate, "k--", lw=1,
+                  label=f"h^{reference_rate:g}")
     ax.set_xlabel("element size h (mm)")
     ax.set_ylabel("relative frequency error")
     ax.set_title(title)

@@ -88,7 +88,8 @@ def mode_mesh(strips: Sequence, modes: Sequence[Sequence[Mapping]], geometry: st
         raise ValueError("no strips to export")
     for k, mode in enumerate(modes, start=1):
         if len(mode) != len(strips):
-            raise ValueError(f"mode {k} has {len(mode)} strip displacements, expected {len(strips)}")
+            raise ValueError(f"mode {k} has {len(mode)} strip displacements, "
+                             f"expected {len(strips)}")
     block = _line_block if geometry == "lines" else _slab_block
     points, cells, strip_id = [], [], []
     vecs = [[] for _ in modes]

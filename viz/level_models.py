@@ -13,7 +13,8 @@ from matplotlib.figure import Figure  # noqa: E402
 __all__ = ["plot_level_models", "plot_profiles"]
 
 _STYLES = [dict(color="tab:blue", ls="--", marker="s"), dict(color="tab:red", ls="-", marker="^"),
-           dict(color="tab:green", ls=":", marker="o"), dict(color="tab:purple", ls="-.", marker="v")]
+           dict(color="tab:green", ls=":", marker="o"),
+           dict(color="tab:purple", ls="-.", marker="v")]
 
 
 def plot_level_models(level, frequency_hz, zeta, sigma_hz, sigma_zeta, models: dict,

@@ -78,7 +78,8 @@ r = render_mode_shape([StripGeometry(x, 0.0, 0.05, 0.1)],
 """
 
 
-def probe_offscreen(timeout: float = 120.0, env: Mapping[str, str] | None = None) -> tuple[bool, str]:
+def probe_offscreen(timeout: float = 120.0,
+                    env: Mapping[str, str] | None = None) -> tuple[bool, str]:
     """Try a tiny render in a child process; ``(ok, message)``.
 
     A machine without working GL libraries can crash the process (segmentation fault)

@@ -110,7 +110,8 @@ def refine_hermite(x, u, w, theta, subdivisions: int = 1):
     return close(xr, x[-1]), close(ur, u[-1]), close(wr, w[-1]), close(tr, theta[-1])
 
 
-def slab_fields(strip: StripGeometry, disp: Mapping | None = None, subdivisions: int = 1) -> SlabField:
+def slab_fields(strip: StripGeometry, disp: Mapping | None = None,
+                subdivisions: int = 1) -> SlabField:
     """Corner fibres of a strip's slab and their Euler-Bernoulli displacements.
 
     A fibre at height ``zeta = z - z_center`` moves by ``(u - zeta * theta, 0, w)``
@@ -148,9 +149,9 @@ def auto_scales(fields: Sequence[SlabField], deflection_fraction: float = 0.1,
     Returns ``(scale, thickness_scale)``: the stack's thickness is exaggerated by
     ``thickness_scale`` (>= 1) until its height is ``min_height_fraction`` of the length,
     and ``scale`` brings the largest drawn displacement to ``deflection_fraction`` of the
-    length (a given ``thickness_scale`` is kept). Axial displacements are drawn multiplied by ``thickness_scale`` too (they are
-    proportional to thickness x rotation), so the picture is that of a stack
-    ``thickness_scale`` times thicker with the same transverse shape.
+    length (a given ``thickness_scale`` is kept). Axial displacements are drawn multiplied by
+    ``thickness_scale`` too (they are proportional to thickness x rotation), so the picture is
+    that of a stack ``thickness_scale`` times thicker with the same transverse shape.
     """
     xs = np.concatenate([f.x for f in fields])
     zs = np.concatenate([f.z for f in fields])

@@ -259,7 +259,8 @@ def build_model(cf) -> BuiltCase:
     is_free = np.ones(nodes.n, dtype=bool)
     is_free[fixed] = False
 
-    normal_rows, normal_k, joint_rows, joint_k, joint_x, joint_itf, table = [], [], [], [], [], [], []
+    normal_rows, normal_k, joint_rows, joint_k, joint_x, joint_itf, table = (
+        [], [], [], [], [], [], [])
     for i, itf in enumerate(cf.interfaces):
         lo_b, up_b = (cf.beam(n) for n in itf.beams)
         xm = 0.5 * (itf.x[0] + itf.x[1])

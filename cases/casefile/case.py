@@ -22,7 +22,8 @@ def case_from_file(path) -> Case:
     cf = read_case_file(Path(path))
 
     def file_at(element_size=None, calibrated=True):
-        f = cf if element_size is None else dataclasses.replace(cf, element_size=float(element_size))
+        f = cf if element_size is None else dataclasses.replace(
+            cf, element_size=float(element_size))
         return calibrate(f) if calibrated else (f, None)
 
     def fe_model(element_size=None, calibrated=True):

@@ -48,7 +48,8 @@ def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
         raise InputError(f"{cf.path}: {', '.join(missing)} not given (fitted by update): a "
                          f"nonlinear model needs them in the file")
     if model.joint_stiffness.size == 0:
-        raise InputError(f"{cf.path}: no joint interface (tangential = 'joint'): no nonlinear model")
+        raise InputError(f"{cf.path}: no joint interface (tangential = 'joint'): "
+                         "no nonlinear model")
     if cf.drive is None:
         raise InputError(f"{cf.path}: [drive] missing: a nonlinear model needs the drive point")
     n = model.n_free
@@ -74,4 +75,5 @@ def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
         force=DEFAULT_FORCES.copy(), lines_hz=np.linspace(0.9 * f, 1.1 * f, 81),
         band_hz=(0.9 * f, 1.1 * f),
         joint_source=f"given in {cf.path.name}: " + "; ".join(
-            f"chi = {i.chi:g}, kt = {i.kt:g} N/m, fs = {i.fs:g} N, beta = {i.beta:g}" for i in itfs))
+            f"chi = {i.chi:g}, kt = {i.kt:g} N/m, fs = {i.fs:g} N, beta = {i.beta:g}"
+            for i in itfs))

@@ -89,7 +89,8 @@ class Table:
             self.fail(key, f"must be a non-empty list of numbers, got {v!r}")
         out = []
         for item in v:
-            if isinstance(item, bool) or not isinstance(item, (int, float)) or not math.isfinite(item):
+            if (isinstance(item, bool) or not isinstance(item, (int, float))
+                    or not math.isfinite(item)):
                 self.fail(key, f"must hold finite numbers, got {item!r}")
             out.append(float(item))
         if length is not None and len(out) != length:

@@ -78,7 +78,8 @@ def calibrate_clamp_length(config: DoubleBeamConfig | None = None,
     config = DoubleBeamConfig() if config is None else config
 
     def residual(grip):
-        return bending_mode_frequency(build_double_beam(replace(config, clamp_length=grip)), order) - target_hz
+        return (bending_mode_frequency(build_double_beam(replace(config, clamp_length=grip)), order)
+                - target_hz)
 
     lo, hi = 0.0, 0.2 * config.length
     if residual(lo) > 0:

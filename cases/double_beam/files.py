@@ -34,8 +34,8 @@ def write_frf_files(rep: DoubleBeamReport, out) -> list[Path]:
         iwanfe identify results/double-beam/frf/level_*.csv --band 240 264 --out modal.csv
 
     (``identify``'s default options differ from the study's, see
-    :mod:`cases.double_beam.settings`, so its zeta agrees with ``simulated_measured.csv`` to about 1e-4 relative, not
-    bitwise.)
+    :mod:`cases.double_beam.settings`, so its zeta agrees with ``simulated_measured.csv`` to
+    about 1e-4 relative, not bitwise.)
     """
     from ident.frf_files import FRFSet, write_frf
 

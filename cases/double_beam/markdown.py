@@ -60,7 +60,8 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
         ["force scale (N/V)", "level-1 force (N)", "R~ (N/m^(chi+2))", "phi_max (m)", "F_S (N)",
          "top level linear slip / phi_max", "top level simulated slip / phi_max"],
         [[_f(r["force_scale_N_per_V"], "g"), _f(r["level1_force_N"], ".4g"), _f(r["R"], ".4e"),
-          _f(r["phi_max"], ".4e"), _f(r["F_S"], ".4g"), _f(r["top_linear_slip_over_phi_max"], ".4f"),
+          _f(r["phi_max"], ".4e"), _f(r["F_S"], ".4g"),
+          _f(r["top_linear_slip_over_phi_max"], ".4f"),
           _f(r.get("top_simulated_slip_over_phi_max"), ".4f")] for r in rep.force_scale_rows])
 
     if rep.protocol_comparison is not None:
@@ -172,7 +173,8 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
                          _list(v["held_out_delta_omega2_error_percent"]),
                          _list(v["held_out_delta_zeta_error_percent"])])
     out += _md_table(["identification", "method", "chi", f"chi - input ({su.chi:.4f})",
-                      "95 % interval", "R~ error %", "held-out loss err %", "held-out growth err %"],
+                      "95 % interval", "R~ error %", "held-out loss err %",
+                      "held-out growth err %"],
                      rows)
     if rep.weak_joint_rows:
         out.append(f"Weaker joints (R scaled, chi = {su.chi:.4f} kept; same lines, levels and "
@@ -195,7 +197,8 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
                              _f(w["modal_filter_ratio_last_fit_level"], ".4f"), which]
                             + [_f(rec[k].get("chi_error"), "+.4f") for k in methods]
                             + [_f(rec[k].get("R_error_percent"), "+.1f") for k in methods])
-        out += _md_table(["R scale", "top slip/phi_max", f"slip per N, level {st.fit[-1]} / level 1",
+        out += _md_table(["R scale", "top slip/phi_max",
+                          f"slip per N, level {st.fit[-1]} / level 1",
                           f"Delta c filter/decoupled, level {st.fit[-1]}", "identification"]
                          + [f"chi error {k}" for k in methods]
                          + [f"R~ error % {k}" for k in methods], rows)
@@ -203,8 +206,8 @@ def markdown(rep: DoubleBeamReport, files=(), wall_time: float | None = None) ->
     out.append("")
     out.append("`D = phi_d / (phi^T M x)` at the resonance (root of Re D) of every level: "
                "Delta c = Im D - Omega c_n and Delta omega^2 = omega_n^2 - Omega^2, against the "
-               "decoupled eq. 30-32 (|kappa1| B and kappa2 B with the input R, chi and the simulated "
-               "slips).")
+               "decoupled eq. 30-32 (|kappa1| B and kappa2 B with the input R, chi and the "
+               "simulated slips).")
     out.append("")
     mf = rep.modal_filter
     rows = []

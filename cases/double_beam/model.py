@@ -117,7 +117,8 @@ class DoubleBeamConfig:
                 raise ValueError(f"{name} must be >= 0, got {v!r}")
         if self.clamp_length is not None and not (0 <= self.clamp_length < self.length):
             raise ValueError(f"clamp_length must be in [0, length), got {self.clamp_length!r}")
-        if not (np.isfinite(self.glue_tangential_stiffness) and self.glue_tangential_stiffness >= 0):
+        if not (np.isfinite(self.glue_tangential_stiffness)
+                and self.glue_tangential_stiffness >= 0):
             raise ValueError("glue_tangential_stiffness must be >= 0")
         if self.contact not in ("tied", "glue-only"):
             raise ValueError(f"contact must be 'tied' or 'glue-only', got {self.contact!r}")
@@ -294,7 +295,8 @@ def build_double_beam(config: DoubleBeamConfig | None = None) -> DoubleBeamModel
 
     # attachments: exciter on the lower strip, Acc. 1 on the upper strip, Acc. 2/3 at the tip
     i_drive = mesh.node_at(config.drive_x)
-    mass_dofs = [lower.dof(i_drive, W), lower.dof(i_drive, U), upper.dof(i_drive, W), upper.dof(i_drive, U)]
+    mass_dofs = [lower.dof(i_drive, W), lower.dof(i_drive, U),
+                 upper.dof(i_drive, W), upper.dof(i_drive, U)]
     mass_vals = [config.exciter_mass] * 2 + [config.sensor_mass] * 2
     if config.glue_sensors:
         tip = n_nodes - 1

@@ -47,8 +47,8 @@ import numpy as np
 from fe.harmonic_balance import HBSettings
 from runs.campaign import HBProtocol, NewmarkProtocol
 
-__all__ = ["PROTOCOLS", "NEWMARK_STEPS", "NEWMARK_MACRO_STEPS", "NEWMARK_TOL", "FREQUENCY_TARGET", "ZETA_TARGET",
-           "campaign_protocol", "protocol_comparison"]
+__all__ = ["PROTOCOLS", "NEWMARK_STEPS", "NEWMARK_MACRO_STEPS", "NEWMARK_TOL", "FREQUENCY_TARGET",
+           "ZETA_TARGET", "campaign_protocol", "protocol_comparison"]
 
 #: Solvers of the campaign (``--protocol``).
 PROTOCOLS = ("hb", "newmark")

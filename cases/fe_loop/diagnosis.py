@@ -184,8 +184,10 @@ def report(data, mask, s: dict, own: dict | None = None) -> dict:
     errs_e = held_out_errors(prob, f.values)
     base_cv = judged["base_cv_error"]
     ext_cv = chosen.cv_error if chosen.causes else base_cv
-    ratio = lambda a, b: (a / b if b else math.inf) if a is not None and b is not None \
-        else None  # noqa: E731
+
+    def ratio(a, b):
+        return (a / b if b else math.inf) if a is not None and b is not None else None
+
     base_err = {r["level"]: float(base_pred.frequency_hz[i] - math.sqrt(data.omega2[i])
                                   / (2 * math.pi))
                 for i, r in zip(np.flatnonzero(~mask), rows)}

@@ -200,7 +200,8 @@ def format_text(s: dict) -> str:
                  "err [%]  slip/phi_max")
     for row in s["levels"]:
         lines.append(f"{row['level']:5d} {'*' if row['held_out'] else ' ':>4s} "
-                     f"{row['measured']['frequency_hz']:12.5f} {row['model']['frequency_hz']:13.5f} "
+                     f"{row['measured']['frequency_hz']:12.5f} "
+                     f"{row['model']['frequency_hz']:13.5f} "
                      f"{row['error_hz']:+9.4f} {row['measured']['zeta']:11.6f} "
                      f"{row['model']['zeta']:12.6f} {100 * row['error_zeta_rel']:+8.3f} "
                      f"{row['slip_over_phi_max']:11.3g}")
@@ -219,14 +220,17 @@ def format_text(s: dict) -> str:
                      f"{_fmt(min(sv['grid_inside']), 4)} .. {_fmt(max(sv['grid_inside']), 4)}); "
                      f"top held-out level moves {f['min'][-1]:.4f}..{f['max'][-1]:.4f} Hz, "
                      f"zeta {z['min'][-1]:.5f}..{z['max'][-1]:.5f}, top slip/phi_max "
-                     f"{sv['top_slip_over_phi_max']['min']:.3g}..{sv['top_slip_over_phi_max']['max']:.3g}")
+                     f"{sv['top_slip_over_phi_max']['min']:.3g}.."
+                     f"{sv['top_slip_over_phi_max']['max']:.3g}")
     if s["assumptions"]:
         lines.append("assumed properties changed (refitted): dchi2, top held-out level shift "
                      "[Hz], [% zeta], top slip/phi_max")
         for a in s["assumptions"]:
+            zeta_shift = (None if a['shift_top_zeta_rel'] is None
+                          else 100 * a['shift_top_zeta_rel'])
             lines.append(f"  {a['assumption']:28s} {a['delta_chi2']:+9.2f} "
                          f"{_fmt(a['shift_top_frequency_hz'], 3):>10s} "
-                         f"{_fmt(None if a['shift_top_zeta_rel'] is None else 100 * a['shift_top_zeta_rel'], 3):>8s}"
+                         f"{_fmt(zeta_shift, 3):>8s}"
                          f" {a['top_slip_over_phi_max']:9.3g}")
     t = s["timing_s"]
     lines.append(f"time: {t['total']:.1f} s ({s['executor']})")
@@ -238,11 +242,13 @@ def markdown(s: dict) -> str:
     rows = "\n".join(f"| {_LABEL.get(n, n)} | {p['value']:.7g} | "
                      f"{_fmt((p.get('interval') or [None, None])[0])} .. "
                      f"{_fmt((p.get('interval') or [None, None])[1])} | {p.get('status', '')} | "
-                     f"{p['kind']}{' (at ' + p['at_bound'] + ' bound)' if p.get('at_bound') else ''} | "
+                     f"{p['kind']}"
+                     f"{' (at ' + p['at_bound'] + ' bound)' if p.get('at_bound') else ''} | "
                      f"{p['description']} |" for n, p in s["parameters"].items())
     lv = "\n".join(f"| {r['level']}{'*' if r['held_out'] else ''} | "
                    f"{r['measured']['frequency_hz']:.5f} | {r['model']['frequency_hz']:.5f} | "
-                   f"{r['error_hz']:+.4f} | {r['measured']['zeta']:.6f} | {r['model']['zeta']:.6f} | "
+                   f"{r['error_hz']:+.4f} | {r['measured']['zeta']:.6f} | "
+                   f"{r['model']['zeta']:.6f} | "
                    f"{100 * r['error_zeta_rel']:+.3f} | {r['slip_over_phi_max']:.3g} |"
                    for r in s["levels"])
     sens = "\n".join(f"- **{_LABEL.get(n, n)}** not determined: over its likelihood region the "

@@ -85,12 +85,15 @@ class SliderBank:
                 scale = self.R * self.lo**p / p
                 dk[~micro] = scale * (0.5 * l_in @ _GW)
                 kq[~micro] = scale * (0.5 * l_q @ _GW)
-        dens = None
         if self.uniform > 0:
-            dens = lambda phi: self.uniform + 0.0 * phi          # noqa: E731
+            def dens(phi):
+                return self.uniform + 0.0 * phi
         elif self.shape is not None and self.R > 0:
-            dens = lambda phi: self.R * self.lo**self.chi * self.shape(  # noqa: E731
-                (phi - self.lo) / (self.hi - self.lo))
+            def dens(phi):
+                return self.R * self.lo**self.chi * self.shape(
+                    (phi - self.lo) / (self.hi - self.lo))
+        else:
+            dens = None
         if dens is not None:
             top = np.minimum(X, self.hi)
             on = top > self.lo

@@ -152,7 +152,8 @@ def _compare(case, args) -> int:
     dev_f, dev_r = cmp.deviation("force"), cmp.deviation("response")
     e = cmp.data["epmc"]
     for i, lv in enumerate(e.level):
-        print(f" {lv:5d}  {e.response_amplitude[i]:11.4e}  {cmp.slip['epmc'][i].max() / case.phi_max:12.4g}"
+        print(f" {lv:5d}  {e.response_amplitude[i]:11.4e}  "
+              f"{cmp.slip['epmc'][i].max() / case.phi_max:12.4g}"
               f"  {e.omega_hz[i]:10.5f}  {dev_f['frequency'][i]:+12.2e} {dev_f['zeta'][i]:+11.2e}"
               f"  {dev_r['frequency'][i]:+15.2e} {dev_r['zeta'][i]:+11.2e}")
     print(f"estimates (fit levels {case.fit_levels}); bias of chi = slip law + slip per modal "
@@ -195,7 +196,8 @@ def run_response_control(args) -> int:
     for r in rep["levels"]:
         print(f" {r['level']:5d}  {r['held_amplitude_m']:10.4e} {r['force_N']:9.4g} "
               f"{r['frequency_hz']:12.6f} {r['epmc_frequency_hz']:12.6f} "
-              f"{100 * r['zeta']:12.6f} {100 * r['epmc_zeta']:12.6f} {r['slip_over_phi_max']:13.4g}")
+              f"{100 * r['zeta']:12.6f} {100 * r['epmc_zeta']:12.6f} "
+              f"{r['slip_over_phi_max']:13.4g}")
     print(f"estimate (amplitude method on the held amplitude, levels {e['fit_levels']}): chi = "
           f"{e['chi']:.5f} (error {e['chi_error']:+.4f}), R~ = {e['R']:.4g} "
           f"({100 * e['R_relative_error']:+.1f} %)")

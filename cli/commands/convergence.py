@@ -47,7 +47,8 @@ def format_table(report: dict) -> str:
              "beta_n L = " + ", ".join(f"{b:.6f}" for b in c["beta_L"]),
              f"{'elements':>8} " + " ".join(f"{'mode ' + str(j + 1):>10}" for j in range(n_modes))]
     for n, row in zip(c["elements"], err):
-        lines.append(f"{n:>8} " + " ".join(f"{v:10.2e}" if np.isfinite(v) else f"{'-':>10}" for v in row))
+        lines.append(f"{n:>8} " + " ".join(f"{v:10.2e}" if np.isfinite(v) else f"{'-':>10}"
+                                           for v in row))
     lines.append(f"{'rate':>8} " + " ".join(f"{r:10.3f}" for r in c["rate"]))
     lines.append(f"{'best':>8} " + " ".join(f"{v:10.2e}" for v in c["best_error"]))
     lines.append(f"{'at n':>8} " + " ".join(f"{v:>10}" for v in c["best_elements"]))
@@ -60,7 +61,8 @@ def format_table(report: dict) -> str:
     js = d["joint_sweep"]
     lines += _sweep_table("joints", [f"{v:8d}" for v in js["n_joints"]], js)
     df = d["default"]
-    lines.append(f"default mesh ({1e3 * df['element_size_m']:g} mm elements, {df['n_joints']} joints, "
+    lines.append(f"default mesh ({1e3 * df['element_size_m']:g} mm elements, "
+                 f"{df['n_joints']} joints, "
                  f"{df['n_free_dofs']} DOFs): {df['frequency_hz']:.4f} Hz, estimated error "
                  f"{df['frequency_error_estimate']:.1e} (frequency), "
                  f"{df['glue_slip_error_estimate']:.1e} (glue slip)")

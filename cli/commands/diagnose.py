@@ -56,7 +56,8 @@ def register(subparsers) -> None:
                         help="mode label in the file (default: the only/first one)")
     parser.add_argument("--backbone", action="store_true",
                         help="with FILE and --case (a case with a joint setup): also "
-                             "predict every level from the FE backbone (EPMC) of the joint estimated from the levels "
+                             "predict every level from the FE backbone (EPMC) of the joint "
+                             "estimated from the levels "
                              "below the top three (iwanfe estimate --backbone)")
     add_rig_argument(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")

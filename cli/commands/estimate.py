@@ -171,7 +171,8 @@ def format_table(est, source: str = "") -> str:
     lines.append(f"  points used: {used}")
     if est.points_excluded:
         lines.append("  points excluded: " + ", ".join(
-            f"{p['from_level']}->{p['to_level']} ({p['delta_d']:.3g})" for p in est.points_excluded))
+            f"{p['from_level']}->{p['to_level']} ({p['delta_d']:.3g})"
+            for p in est.points_excluded))
     lines.append("")
     lines.append(" level  held  loss omega^2 [rad^2/s^2]        growth zeta [%]              "
                  "omega^2 [rad^2/s^2]       zeta [%]")

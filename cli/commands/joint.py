@@ -41,7 +41,8 @@ def register(subparsers) -> None:
                         help="macro-slip force F_S [N]")
     parser.add_argument("--beta", type=float, required=True,
                         help="Dirac-to-continuous stiffness ratio beta (>= 0)")
-    parser.add_argument("--amplitude", type=float, nargs="+", action="extend", metavar="A", default=None,
+    parser.add_argument("--amplitude", type=float, nargs="+", action="extend", metavar="A",
+                        default=None,
                         help="slip amplitudes [m]")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--plot", metavar="FILE.png", default=None,

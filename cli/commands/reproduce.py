@@ -126,10 +126,13 @@ def _lumped_text(rep, files) -> str:
     lines.append("")
     lines.append("Table 1: joint slip amplitudes (m) at the identified resonance, ours | paper")
     for k, t in d["table1"].items():
-        lines.append(f" mode {k}:  lvl  force N   f_id Hz    Iwan1      Iwan2    | paper Iwan1  Iwan2")
+        lines.append(f" mode {k}:  lvl  force N   f_id Hz    Iwan1      Iwan2    "
+                     "| paper Iwan1  Iwan2")
         for i in range(len(t["level"])):
-            lines.append(f"         {t['level'][i]:3d} {t['force_N'][i]:7g} {_fmt(t['frequency_hz'][i], '9.3f')}"
-                         f"  {t['iwan1'][i]:.3e}  {t['iwan2'][i]:.3e} |  {t['paper_iwan1'][i]:.5f}  "
+            lines.append(f"         {t['level'][i]:3d} {t['force_N'][i]:7g} "
+                         f"{_fmt(t['frequency_hz'][i], '9.3f')}"
+                         f"  {t['iwan1'][i]:.3e}  {t['iwan2'][i]:.3e} |  "
+                         f"{t['paper_iwan1'][i]:.5f}  "
                          f"{t['paper_iwan2'][i]:.5f}")
     lines.append("")
     lines.append("Fig. 5 / chi (true -0.5):   paper method | paper's value | amplitude "

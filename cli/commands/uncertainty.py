@@ -135,7 +135,8 @@ def _f(x, spec):
 
 
 def text_report(rep, source: str, files, wall: float, case_name: str) -> str:
-    """The readable report of an :class:`~cases.double_beam.uncertainty_report.UncertaintyReport`."""
+    """The readable report of an
+    :class:`~cases.double_beam.uncertainty_report.UncertaintyReport`."""
     st, src, dist = rep.settings, rep.source, rep.distribution
     c = st.confidence
     lo, hi = (100 * q for q in st.quantiles)

@@ -51,7 +51,10 @@ def text(r: dict) -> str:
         lines += [f"{name}; * = held out of the fit", head]
         for row in r["levels"]:
             mc = row[f"mc_{key}"]
-            s = lambda v: _f(None if v is None else scale * v, spec)  # noqa: E731
+
+            def s(v):
+                return _f(None if v is None else scale * v, spec)
+
             lines.append(f" {row['level']:>4}{'*' if row['held_out'] else ' '} "
                          f"{s(row[f'measured_{key}'])}  {s(row[f'nominal_{key}'])}  "
                          f"{s(mc['median'])}  {s(mc['lo'])} .. {s(mc['hi'])}  "

@@ -24,7 +24,9 @@ class Bounded:
     interval_kind: str | None = None
 
     def to_json(self) -> dict:
-        fin = lambda v: float(v) if np.isfinite(v) else None  # noqa: E731
+        def fin(v):
+            return float(v) if np.isfinite(v) else None
+
         return {"value": self.value, "lower_bound": fin(self.lower),
                 "upper_bound": fin(self.upper),
                 "at_bound": self.at_bound, "which_bound": self.which,

@@ -75,7 +75,10 @@ class NoiseModel:
         out = {}
         for c in self.total:
             scale = np.abs(values[c]) if c in _RELATIVE else 1.0
-            rel = lambda a: float(np.median(a / scale))  # noqa: E731
+
+            def rel(a):
+                return float(np.median(a / scale))
+
             out[c] = {"source": self.source[c], "kind": self.kind.get(c),
                       "identification_rel": rel(self.identification[c]),
                       "repeatability_rel": rel(self.repeatability[c]),

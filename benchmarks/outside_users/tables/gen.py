@@ -124,51 +124,71 @@ if __name__ == "__main__":
     series("ms10", seed=S, truth="micro-slip Iwan chi=-0.4", expect="none")
     series("ms10_s2", seed=2, truth="micro-slip Iwan chi=-0.4 (other seed)", expect="none")
     series("ms10_s3", seed=3, truth="micro-slip Iwan chi=-0.4 (other seed)", expect="none")
-    series("ms10_std", seed=S, std_cols=True, truth="micro-slip + std cols (1/30 of repeatability)", expect="none")
-    series("ms10_rep", seed=S, repeats=(1, 5, 10), truth="micro-slip, levels 1,5,10 re-run at end", expect="none")
-    series("ms10_rep_std", seed=S, repeats=(1, 5, 10), std_cols=True, truth="micro-slip, repeats + std", expect="none")
-    series("ms10_shuf", seed=S, repeats=(1, 5, 10), shuffle=True, truth="micro-slip, shuffled run order + repeats", expect="none")
-    series("ms10_resp", seed=S, resp_col=True, truth="micro-slip with response_amplitude column", expect="none")
+    series("ms10_std", seed=S, std_cols=True,
+           truth="micro-slip + std cols (1/30 of repeatability)", expect="none")
+    series("ms10_rep", seed=S, repeats=(1, 5, 10),
+           truth="micro-slip, levels 1,5,10 re-run at end", expect="none")
+    series("ms10_rep_std", seed=S, repeats=(1, 5, 10), std_cols=True,
+           truth="micro-slip, repeats + std", expect="none")
+    series("ms10_shuf", seed=S, repeats=(1, 5, 10), shuffle=True,
+           truth="micro-slip, shuffled run order + repeats", expect="none")
+    series("ms10_resp", seed=S, resp_col=True,
+           truth="micro-slip with response_amplitude column", expect="none")
     series("ms4", n=4, step=2.5, seed=S, truth="micro-slip 4 levels", expect="none")
     series("ms6", n=6, step=2.0, seed=S, truth="micro-slip 6 levels", expect="none")
-    series("ms6_rep_std", n=6, step=2.0, seed=S, repeats=(1, 6), std_cols=True, truth="micro-slip 6 levels, repeats, std", expect="none")
+    series("ms6_rep_std", n=6, step=2.0, seed=S, repeats=(1, 6), std_cols=True,
+           truth="micro-slip 6 levels, repeats, std", expect="none")
     series("rc10", control="response", seed=S, truth="micro-slip, response control", expect="none")
-    series("rc6_rep", n=6, step=2.0, control="response", repeats=(1, 3), seed=S, truth="micro-slip, response control, 6 levels, repeats", expect="none")
+    series("rc6_rep", n=6, step=2.0, control="response", repeats=(1, 3), seed=S,
+           truth="micro-slip, response control, 6 levels, repeats", expect="none")
 
     # bolt loosening: omega2 -0.6 % (freq -0.3 % = 6 repeatability sd) from run 6 on
     def step_eff(ro, nrun, w2, z):
         return (w2 * (1 - 0.006), z * 1.05) if ro >= 6 else (w2, z)
-    series("step10", seed=S, time_effect=step_eff, truth="freq step -0.3 % from run 6 (bolt loosening), runs in level order", expect="not none (out-of-catalogue; unexplained/ thermal-drift/macro-slip plausible)")
-    series("step10_shuf", seed=S, repeats=(1, 5, 10), shuffle=True, time_effect=step_eff, truth="freq step -0.3 % from run 6, shuffled runs + repeats", expect="thermal-drift or unexplained (step in time)")
+    series("step10", seed=S, time_effect=step_eff,
+           truth="freq step -0.3 % from run 6 (bolt loosening), runs in level order",
+           expect="not none (out-of-catalogue; unexplained/ thermal-drift/macro-slip plausible)")
+    series("step10_shuf", seed=S, repeats=(1, 5, 10), shuffle=True, time_effect=step_eff,
+           truth="freq step -0.3 % from run 6, shuffled runs + repeats",
+           expect="thermal-drift or unexplained (step in time)")
 
     # slow drift: omega2 -0.8 % linearly with run order (freq -0.4 % = 8 sd)
     def drift(ro, nrun, w2, z):
         return w2 * (1 - 0.008 * (ro - 1) / (nrun - 1)), z
-    series("drift_shuf", seed=S, repeats=(1, 5, 10), shuffle=True, time_effect=drift, truth="thermal drift omega2 -0.8 % over runs, shuffled", expect="thermal-drift")
-    series("drift_rep", seed=S, repeats=(1, 2), time_effect=drift, truth="thermal drift, in order, levels 1,2 re-run at end", expect="thermal-drift")
+    series("drift_shuf", seed=S, repeats=(1, 5, 10), shuffle=True, time_effect=drift,
+           truth="thermal drift omega2 -0.8 % over runs, shuffled", expect="thermal-drift")
+    series("drift_rep", seed=S, repeats=(1, 2), time_effect=drift,
+           truth="thermal drift, in order, levels 1,2 re-run at end", expect="thermal-drift")
 
     # hardening at the top levels
     def hard(A, w2, z):
         return w2 + 0.03 * W0 * (A / 12.0) ** 2, z
-    series("hard10", seed=S, extra=hard, truth="geometric hardening +3 % omega2 at A=12 (~top)", expect="geometric-hardening")
-    series("hard10_rep", seed=S, extra=hard, repeats=(1, 5, 10), std_cols=True, truth="hardening + repeats + std", expect="geometric-hardening")
+    series("hard10", seed=S, extra=hard, truth="geometric hardening +3 % omega2 at A=12 (~top)",
+           expect="geometric-hardening")
+    series("hard10_rep", seed=S, extra=hard, repeats=(1, 5, 10), std_cols=True,
+           truth="hardening + repeats + std", expect="geometric-hardening")
 
     # quadratic damping (no softening)
     def qd(A, w2, z):
         return w2, z + 0.004 * (A / 12.0) ** 1.5
-    series("qdamp10", seed=S, extra=qd, truth="extra damping +0.4 % abs at top, no softening", expect="quadratic-damping")
+    series("qdamp10", seed=S, extra=qd, truth="extra damping +0.4 % abs at top, no softening",
+           expect="quadratic-damping")
 
     # macro-slip: above A=5 extra softening and damping growth bends
     def macro(A, w2, z):
         x = max(A - 5.0, 0.0)
         return w2 - 0.004 * W0 * x ** 1.3, z + 0.0008 * x ** 1.0
-    series("macro10", seed=S, extra=macro, truth="frequency drop bends away above A=5 (macro-slip-like)", expect="macro-slip")
+    series("macro10", seed=S, extra=macro,
+           truth="frequency drop bends away above A=5 (macro-slip-like)", expect="macro-slip")
 
     # nonproportional: exciter force drop-out, 40 % at top
-    series("nonprop10", seed=S, resp_col=True, drive_loss=lambda lev, n: 1 - 0.4 * ((lev - 1) / (n - 1)) ** 1.5,
-           truth="force drop-out 40 % at top, response_amplitude measured", expect="nonproportional-amplitude")
+    series("nonprop10", seed=S, resp_col=True,
+           drive_loss=lambda lev, n: 1 - 0.4 * ((lev - 1) / (n - 1)) ** 1.5,
+           truth="force drop-out 40 % at top, response_amplitude measured",
+           expect="nonproportional-amplitude")
 
-    # brief's example form: f = f0(1 - a x^1.6), zeta = z0 + b x^0.7 (x = level excitation, normalized)
+    # brief's example form: f = f0(1 - a x^1.6), zeta = z0 + b x^0.7
+    # (x = level excitation, normalized)
     rng = np.random.default_rng(7)
     n = 10
     E = 0.5 * 1.5 ** np.arange(n)
@@ -181,8 +201,10 @@ if __name__ == "__main__":
         fh.write("level,excitation,omega2,zeta\n")
         for i in range(n):
             fh.write("%d,%s,%s,%s\n" % (i + 1, fmt(E[i]), fmt(w2[i]), fmt(zz[i])))
-    TRUTH["powerform10"] = dict(truth="f=f0(1-0.03x^1.6), zeta=0.004+0.01x^0.7 (exponents differ: not Iwan-tied)",
-                                expect="not none ideally (breaks the tie); any named cause plausible")
+    TRUTH["powerform10"] = dict(truth="f=f0(1-0.03x^1.6), zeta=0.004+0.01x^0.7 "
+                                      "(exponents differ: not Iwan-tied)",
+                                expect="not none ideally (breaks the tie); "
+                                       "any named cause plausible")
     # noise-free micro-slip (sanity)
     FREQ_REP, ZETA_REP = 1e-7, 1e-6
     series("ms10_clean", seed=S, truth="micro-slip, essentially noise-free", expect="none")
