@@ -66,7 +66,8 @@ def headline(rep: "DoubleBeamReport") -> list[str]:
             lines.append(f"Recovery on the simulated data ({name} identification), input chi = "
                          f"{su.chi:.4f}, R = {su.R:.4g}: " + "; ".join(
                              f"{k}: chi = {e.chi:.4f} ({e.chi - su.chi:+.4f}), R~ error "
-                             f"{100 * (e.R / su.R - 1):+.0f} %" for k, (e, _, _) in ee.items()) + ".")
+                             f"{100 * (e.R / su.R - 1):+.0f} %"
+                             for k, (e, _, _) in ee.items()) + ".")
     for w in rep.weak_joint_rows:
         errs = [v["chi_error"] for v in w["recovery"]["lscf"].values() if "chi_error" in v]
         rerr = [v["R_error_percent"] for v in w["recovery"]["lscf"].values() if "chi_error" in v]

@@ -148,7 +148,10 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
     eo, ez, er = _predictions(ext, obs)
     n = obs.n
     ch = len(obs.channels)
-    stdres = lambda f: f.residual.reshape(ch, n).T  # noqa: E731
+
+    def stdres(f):
+        return f.residual.reshape(ch, n).T
+
     unfit = [k for k, f in fits.items() if f.aic is None]
     bounds = parameter_bounds(ext, obs, profiles)
     on_bound = [k for k, b in bounds.items() if b["at_bound"]]
