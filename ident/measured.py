@@ -19,12 +19,12 @@ Every violated rule raises :class:`ident.errors.InputError` with one line
 ``FILE:LINE:COLUMN: message`` (LINE 1-based, the header is line 1; COLUMN the column
 name, for a rule about a whole row the column the rule is about: ``level`` for a
 duplicate (mode, level), ``excitation`` for a non-increasing excitation, ``mode`` for
-too few levels). Repeats (rows sharing (mode, level) with different ``run_order``) are
-legal: the same level measured again; they count once toward the level count, and every
-row of a level must exceed (in the held amplitude) every row of the level below. Blank lines
-are skipped. Beyond the spec the reader also rejects an empty file, duplicated or empty
-header names, rows whose field count differs from the header, a non-integer or < 1
-``level``, non-integer ``mode``/``run_order``, and a mode whose rows mix both controls.
+too few levels). Repeats (rows sharing (mode, level), other ``run_order``) are legal: the
+same level measured again; they count once toward the level count, and every row of a
+level must exceed (in the held amplitude) every row of the level below. Blank lines are
+skipped. Beyond the spec the reader also rejects an empty file, duplicated or empty header
+names, rows whose field count differs from the header, a non-integer or < 1 ``level``,
+non-integer ``mode``/``run_order``, and a mode whose rows mix both controls.
 
 Response control (``control = response``): each level held a constant response
 amplitude, so ``response_amplitude`` is required and must increase with ``level``; the
@@ -369,8 +369,7 @@ def summary(data: MeasuredData) -> str:
     out = [f"{data.source or '<memory>'}: {len(data)} rows, "
            f"modes {', '.join(map(str, data.modes))}"]
     for m in data.modes:
-        d = data.for_mode(m)
-        f = d.omega_hz
+        d, f = data.for_mode(m), data.for_mode(m).omega_hz
         out.append(
             f"  mode {m}: {len(d)} levels, excitation {d.excitation[0]:.4g} .. "
             f"{d.excitation[-1]:.4g}, f_n {f[0]:.6g} .. {f[-1]:.6g} Hz, "

@@ -5,17 +5,12 @@ numbers (``report.md``, ``report.json``, the command's text output).
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from inverse.iwan_modal import kappa_ratio
-
-if TYPE_CHECKING:                   # report.py imports this module
-    from cases.double_beam.report import DoubleBeamReport
 
 __all__ = ["headline", "assumption_statements"]
 
 
-def headline(rep: "DoubleBeamReport") -> list[str]:
+def headline(rep) -> list[str]:
     """The main findings as sentences with this run's numbers."""
     c = rep.comparison()
     su = rep.setup
@@ -88,7 +83,7 @@ def headline(rep: "DoubleBeamReport") -> list[str]:
     return lines
 
 
-def assumption_statements(rep: "DoubleBeamReport") -> list[str]:
+def assumption_statements(rep) -> list[str]:
     """The decisions of :mod:`cases.double_beam.joint_setup` and
     :mod:`cases.double_beam.settings` with this run's numbers, one per line."""
     su, st = rep.setup, rep.study
