@@ -2,22 +2,21 @@
 :func:`inverse.diagnose.diagnose` computed.
 
 Keys: ``cause``, ``also``, ``alternatives`` (each with ``gain_untestable``: why no
-held-out gain can be measured on these levels, or None), ``ambiguous`` (+ ``ambiguity``: who ties
-and what measurement separates them), ``contradictions`` (plain strings) and
-``contradiction_details``, ``parameters`` (model, chi, ...; fitted), ``base_parameters``,
-``base_error``, ``extended_error``, ``gain``, ``gain_held_out``, ``error_measure``,
-``evidence`` (per candidate), ``fit_test`` (the named or closest model against the
-noise), ``noise`` (per channel: source, identification and repeatability parts, dof),
-``verdict_identification_only`` (the verdict with the identification's noise alone,
-its failed fits counted; its held-out gains are those of the folds with the total
-noise),
-``verdict_own_scatter`` (where a scatter far above the assumed rig repeatability was
-judged against it: the verdict with that scatter as the noise, with its failed fits
-and folds; else None),
-``closest_miss`` (when ``unexplained``), ``parameter_bounds`` (every fitted parameter of
-the named model with ``at_bound``), ``at_bound`` (names), ``held_out_predictions``,
-``failures``, ``untestable``, ``separability``, ``data_warnings``, ``summary``,
-``mode``, ``control``, ``levels`` (data, fits and residuals per row, for the plots).
+held-out gain can be measured on these levels, or None), ``ambiguous`` (+ ``ambiguity``:
+who ties and what measurement separates them), ``contradictions`` (plain strings) and
+``contradiction_details``, ``parameters`` (model, chi, ...; fitted),
+``base_parameters``, ``base_error``, ``extended_error``, ``gain``, ``gain_held_out``,
+``error_measure``, ``evidence`` (per candidate), ``fit_test`` (the named or closest
+model against the noise), ``noise`` (per channel: source, identification and
+repeatability parts, dof), ``verdict_identification_only`` (the verdict with the
+identification's noise alone, its failed fits counted; its held-out gains are those of
+the folds with the total noise), ``verdict_own_scatter`` (where a scatter far above the
+assumed rig repeatability was judged against it: the verdict with that scatter as the
+noise, with its failed fits and folds; else None), ``closest_miss`` (when
+``unexplained``), ``parameter_bounds`` (every fitted parameter of the named model with
+``at_bound``), ``at_bound`` (names), ``held_out_predictions``, ``failures``,
+``untestable``, ``separability``, ``data_warnings``, ``summary``, ``mode``, ``control``,
+``levels`` (data, fits and residuals per row, for the plots).
 """
 from __future__ import annotations
 
