@@ -97,6 +97,15 @@ def _cv(c: FitCandidate, say) -> None:
         c.cv_done = True
 
 
+def _untestable(c: FitCandidate, base: FitCandidate) -> str | None:
+    """Why no held-out gain can be measured (cross-validated without a failure and
+    still no error: no interior fit level), or None."""
+    if (c.causes and c.cv_done and base.cv_done and not (c.cv_failed or base.cv_failed)
+            and (c.cv_error is None or base.cv_error is None)):
+        return "fewer than 3 fit levels: none to leave out"
+    return None
+
+
 def _candidates(cands, base: FitCandidate) -> list:
     base_cv = base.cv_error
     out = []
@@ -110,12 +119,8 @@ def _candidates(cands, base: FitCandidate) -> list:
             gain = base_cv / c.cv_error if c.cv_error > 0 else math.inf
         if c.chi2_by_channel is None:
             c.chi2_by_channel = c.problem.chi2_by_channel(c.fit.values)
-        # cross-validated without a failure and still no error: no interior level
-        untestable = ("fewer than 3 fit levels: none to leave out"
-                      if c.causes and gain is None and c.cv_done and base.cv_done
-                      and not (c.cv_failed or base.cv_failed) else None)
         out.append(Candidate(c.causes, c.fit.k, c.fit.chi2, c.fit.n, gain, c.cv_failed,
-                             c.excluded, c.chi2_by_channel or None, untestable))
+                             c.excluded, c.chi2_by_channel or None, _untestable(c, base)))
     return out
 
 
@@ -133,7 +138,8 @@ def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None)
 
     Returns ``selection`` (the judge's answer), ``candidates`` (name -> FitCandidate)
     and ``evidence`` (per candidate: ``chi2``, ``n_params``, ``weight``, ``fit_test``,
-    ``cv_error``, ``gain``, ``failed_folds``, ``why_not``)."""
+    ``cv_error``, ``gain``, ``gain_computed``, ``failed_folds``, ``gain_untestable``,
+    ``why_not``)."""
     say = progress or (lambda s: None)
     cands = [base] + list(extensions)
     _cv(base, say)
@@ -169,6 +175,7 @@ def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None)
                       "weight": sel.weights[c.name], "fit_test": t.to_json(),
                       "cv_error": c.cv_error, "gain": gain,
                       "gain_computed": c.cv_done, "failed_folds": c.cv_failed,
+                      "gain_untestable": _untestable(c, base),
                       "failed_simulations": 0 if c.fit is None else c.fit.failed_simulations,
                       "why_not": _reason(c, sel)}
     return {"selection": sel, "candidates": {c.name: c for c in cands}, "evidence": ev,

@@ -301,3 +301,30 @@ def test_naming_power_is_what_select_names(nu):
     assert abs(named / m - p) < 4 * math.sqrt(p * (1 - p) / m) + 0.005, (named / m, p, lam)
     alpha = stats.chi2.sf(2 * 2 + T_CAUSE, 2)           # the rule's false-alarm rate
     assert p <= detection_bound(lam, alpha) + 1e-12
+
+
+def test_fe_level_judges_without_a_gain_only_where_none_can_be_measured():
+    """``judge_extensions``: a cross-validation that ran without a failed fold yet gave
+    no error (no interior fit level: fewer than 3) makes the gain untestable, and the
+    candidate is judged by its fit test and IC; with a failed fold it cannot be named.
+    (The fits are stand-ins: only their chi2, k and n enter the rule.)"""
+    from types import SimpleNamespace
+
+    from inverse.fe_selection import FitCandidate, judge_extensions
+
+    nm = noise_model(np.arange(1.0, 11.0), {"omega2": np.full(10, 1e6)},
+                     {"omega2": np.full(10, 10.0)}, np.arange(10))
+
+    def cand(causes, k, chi2, failed=0):
+        fit = SimpleNamespace(k=k, chi2=chi2, n=10, values={}, failed_simulations=0)
+        return FitCandidate(causes, problem=None, fit=fit, cv_done=True, cv_error=None,
+                            cv_failed=failed, chi2_by_channel={"omega2": chi2})
+
+    out = judge_extensions(cand((), 3, 40.0), [cand(("macro-slip",), 4, 5.0)], nm)
+    assert out["selection"].cause == "macro-slip"
+    assert out["evidence"]["macro-slip"]["gain"] is None
+    assert out["evidence"]["macro-slip"]["gain_untestable"].startswith("fewer than 3")
+    out = judge_extensions(cand((), 3, 40.0), [cand(("macro-slip",), 4, 5.0, failed=1)], nm)
+    assert out["selection"].unexplained
+    assert out["evidence"]["macro-slip"]["gain_untestable"] is None
+    assert "failed folds" in out["evidence"]["macro-slip"]["why_not"]
