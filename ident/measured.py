@@ -368,8 +368,8 @@ def summary(data: MeasuredData) -> str:
     """Human-readable table: per mode, levels, excitation range, f_n and zeta ranges."""
     out = [f"{data.source or '<memory>'}: {len(data)} rows, "
            f"modes {', '.join(map(str, data.modes))}"]
-    for m in data.modes:
-        d, f = data.for_mode(m), data.for_mode(m).omega_hz
+    for m, d in ((m, data.for_mode(m)) for m in data.modes):
+        f = d.omega_hz
         out.append(
             f"  mode {m}: {len(d)} levels, excitation {d.excitation[0]:.4g} .. "
             f"{d.excitation[-1]:.4g}, f_n {f[0]:.6g} .. {f[-1]:.6g} Hz, "

@@ -140,11 +140,13 @@ def _fit_all(models, obs, also_from=None):
 
 
 def _candidates(fits, cv, obs, refuted):
-    base_err = cv["none"][0]
+    base_err, base_failed = cv["none"][0], cv["none"][3]
     out = []
     for k, f in fits.items():
         err, _, _, failed = cv[k]
         gain = None if base_err is None or err is None or err <= 0 else base_err / err
+        if gain is None and k != "none":
+            failed += base_failed        # a gain over the base model's failed folds
         excluded = ("refuted by the contradictions" if refuted and k == "none"
                     else _inactive(f, obs) if k != "none" else None)
         if f.failed:
