@@ -256,7 +256,10 @@ def test_four_levels_too_few_for_a_gain_are_judged_by_fit_test_and_ic():
     the hardening brings the data within their noise. It is named now on its fit test
     and IC alone, with its gain ``n/a`` and the reason. Six draws: the model-free curve
     of 4 levels has 1 dof and can take such a rise for noise (then ``none``), so at
-    least 4 of 6, and never another cause."""
+    least 4 of 6, and never another cause. Self-consistent by design: the base is the
+    judge's own Iwan form and ``s^p`` lies in the catalogue's hardening family, so this
+    tests the rule, not power on foreign forms (that is the paired run of
+    docs/judge.md, session 18, on the independent generator's series)."""
     rng = np.random.default_rng(1804)
     s = np.geomspace(0.05, 1.0, 4)
     named = 0
