@@ -19,7 +19,9 @@
    within 1 % in frequency, 5 % in damping and (several points) has residue MAC > 0.98
    (residues by LSFD with the poles of that order); this status is what the diagram
    shows. Poles within 1 % in frequency, 25 % in damping and MAC > 0.9 are linked
-   into chains. Which chains are modes is decided by :func:`ident.identify.identify`.
+   into chains. Poles in the band take part, and those within
+   :data:`NEAR_BAND_REACH` of their decay rates outside it (a mode whose skirt the
+   band holds). Which chains are modes is decided by :func:`ident.identify.identify`.
 """
 from __future__ import annotations
 
@@ -41,6 +43,9 @@ STABLE_MAC = 0.98
 LINK_DAMP = 0.25
 LINK_MAC = 0.9
 ZETA_MAX = 0.3
+#: Poles outside the band within this many of their decay rates of an edge take part
+#: (near-band poles: a mode outside the band whose skirt the band holds).
+NEAR_BAND_REACH = 3.0
 
 
 @dataclass
@@ -107,8 +112,9 @@ def stabilization(freq_hz, frf, pole_sets, band_w):
     prev = None
     for n, p in enumerate(pole_sets, start=1):
         wn, z = pole_to_modal(p)
-        ok = np.isfinite(p) & (p.real < 0) & (z < ZETA_MAX) & (p.imag >= band_w[0]) \
-            & (p.imag <= band_w[1])
+        reach = NEAR_BAND_REACH * -p.real
+        ok = np.isfinite(p) & (p.real < 0) & (z < ZETA_MAX) \
+            & (p.imag >= band_w[0] - reach) & (p.imag <= band_w[1] + reach)
         p = p[ok]
         wn, z = wn[ok], z[ok]
         shapes = lsfd(freq_hz, frf, p)[0] if (p.size and frf.shape[1] > 1) else None

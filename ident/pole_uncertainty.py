@@ -2,7 +2,8 @@
 
 The refinement (:mod:`ident.refine`) minimizes the weighted misfit
 ``r(theta) = W (H - H_fit(theta))`` over the poles ``theta = (sigma_r, omega_d,r)``
-(``lambda_r = -sigma_r + i omega_d,r``; pseudo-modes included), the residues and
+(``lambda_r = -sigma_r + i omega_d,r``; near-band poles included, fixed out-of-band
+poles held), the residues and
 residual terms being solved linearly for every trial (variable projection). Near the
 optimum, with independent line noise of equal variance after weighting, the poles'
 covariance is the Gauss-Newton one (Golub and Pereyra 2003; Pintelon and Schoukens
@@ -11,8 +12,8 @@ covariance is the Gauss-Newton one (Golub and Pereyra 2003; Pintelon and Schouke
     Cov(theta) = s^2 (J^T J)^-1,   s^2 = |r|^2 / (N - n_theta - n_lin),
 
 ``J = d r / d theta`` of the *projected* residual (central differences),
-``N = 2 K P`` real residuals (K lines, P points), ``n_lin = P (2 m + 4)`` real linear
-parameters (residues and U, L per point), so the linear parameters' uncertainty is
+``N = 2 K P`` real residuals (K lines, P points), ``n_lin = P (2 (m + n_fixed) + 4)``
+real linear parameters (residues and U, L per point), so the linear parameters' uncertainty is
 accounted for. The residual variance ``s^2`` makes the result independent of the
 weights' scale. Then, by the delta method,
 
@@ -60,19 +61,21 @@ def gauss_newton_covariance(residual, x, steps, n_linear: int) -> np.ndarray:
     return cov
 
 
-def pole_covariance(freq_hz, frf, poles, weights=None) -> np.ndarray:
-    """Covariance (2m, 2m) of ``(sigma_1..m, omega_d,1..m)`` of all ``poles`` (rad/s).
+def pole_covariance(freq_hz, frf, poles, weights=None, fixed=()) -> np.ndarray:
+    """Covariance (2m, 2m) of ``(sigma_1..m, omega_d,1..m)`` of the fitted ``poles``
+    (rad/s), the ``fixed`` poles (out-of-band terms, :mod:`ident.refine`) held.
 
     Parameters
     ----------
     freq_hz : (K,) Hz.  frf : (K, P) complex FRFs the poles were fitted to.
-    poles : (m,) complex, every pole of the fit (modes and pseudo-modes).
+    poles : (m,) complex, the fitted poles (modes and near-band poles).
     weights : (K, P) weights of the fit, or None (uniform).
+    fixed : poles held in the fit; their residues count as linear parameters.
 
     Returns NaN entries where the Jacobian is not finite or there are no residual degrees
-    of freedom; a singular direction (a pseudo-mode that the residual terms can mimic)
-    is left out by a pseudo-inverse."""
+    of freedom; a singular direction is left out by a pseudo-inverse."""
     poles = np.asarray(poles, complex)
+    fixed = np.asarray(fixed, complex)
     frf = np.asarray(frf)
     if frf.ndim == 1:
         frf = frf[:, None]
@@ -80,15 +83,13 @@ def pole_covariance(freq_hz, frf, poles, weights=None) -> np.ndarray:
     P = frf.shape[1]
 
     def resid(x):
-        r = lsfd(freq_hz, frf, -x[:m] + 1j * x[m:], weights)[2]
+        allp = np.concatenate([-x[:m] + 1j * x[m:], fixed])
+        r = lsfd(freq_hz, frf, allp, weights)[2]
         return np.concatenate([r.real.ravel(), r.imag.ravel()])
 
-    # a pseudo-mode parked far outside the band (near 0 Hz) moves nothing: its columns
-    # are dropped (held fixed) and the pseudo-inverse ignores what the residual terms
-    # can mimic, so neither voids the modes' uncertainty
     h = 1e-6 * np.maximum(np.abs(poles), 1e-300)
     return gauss_newton_covariance(resid, np.concatenate([-poles.real, poles.imag]),
-                                   np.concatenate([h, h]), P * (2 * m + 4))
+                                   np.concatenate([h, h]), P * (2 * (m + fixed.size) + 4))
 
 
 def modal_std(poles, cov) -> tuple[np.ndarray, np.ndarray]:

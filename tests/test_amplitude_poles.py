@@ -77,9 +77,12 @@ def _both_fits(seed, strength):
 def test_refit_recovers_the_backbone_at_the_peak(seed):
     law, peak, new, lin = _both_fits(seed, 3.0)
     w2, z = _at(law, peak)
-    # the linear fit is biased by the amplitudes it averages over (the planted effect)
+    # the linear fit is biased by the amplitudes it averages over (the planted effect:
+    # -0.9e-3 .. -2.3e-3 in omega2, +0.9 .. +3.6 % in zeta on these seeds; twice that
+    # before the fixed out-of-band terms of session 19, whose free pseudo-modes took
+    # part of the distortion)
     lin_w2, lin_z = lin.omega2 / w2 - 1, lin.zeta / z - 1
-    assert abs(lin_w2) > 1e-3 and abs(lin_z) > 0.02
+    assert abs(lin_w2) > 5e-4 and abs(lin_z) > 0.005
     # the refit: omega2 within 4 of its uncertainties and 0.4 of the linear bias; zeta
     # within 3 of its uncertainties and 1 % (the first-order damping law leaves ~1 %)
     assert abs(new.omega2 - w2) < 4 * new.omega2_std

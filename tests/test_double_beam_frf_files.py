@@ -55,10 +55,13 @@ def test_frf_files_hold_the_campaign_receptance(written):
 
 def test_identify_command_on_the_frf_files_agrees_with_the_study(written, capsys):
     """``iwanfe identify frf/level_*.csv --band 236 268 --out modal.csv``: levels and drive
-    voltages from the files; with identify's default options (noise weights, pseudo-modes)
-    omega2 within 2e-4 and zeta within 1.5e-3 relative of simulated_measured.csv at the
-    micro-slip levels 1-8 (measured 4e-6..3.9e-5 and 4.9e-5..1.3e-3; level 10 is in
-    macro-slip and its FRF is no modal model: 6 % in zeta)."""
+    voltages from the files; with identify's default options (noise weights, F-tested
+    out-of-band terms) against the study's (uniform weights, none), omega2 within 2e-4
+    and zeta within 3e-3 relative and 3 of the command's own zeta_std of
+    simulated_measured.csv at the micro-slip levels 1-8 (measured 6.5e-6..1.4e-4 and
+    7e-5..2.5e-3, 0.9-1.5 zeta_std: the options weigh the joint's distortion of these
+    noise-free FRFs differently; level 10 is in macro-slip and its FRF is no modal
+    model: 2 % in zeta)."""
     rep, out = written
     files = [str(f) for f in sorted((out / "frf").glob("level_*.csv"))]
     assert main(["identify", *files, "--band", "236", "268", "--out",
@@ -69,7 +72,8 @@ def test_identify_command_on_the_frf_files_agrees_with_the_study(written, capsys
     np.testing.assert_array_equal(cli.level, sim.level)
     np.testing.assert_array_equal(cli.excitation, sim.excitation)
     np.testing.assert_allclose(cli.omega2[:8], sim.omega2[:8], rtol=2e-4)
-    np.testing.assert_allclose(cli.zeta[:8], sim.zeta[:8], rtol=1.5e-3)
+    np.testing.assert_allclose(cli.zeta[:8], sim.zeta[:8], rtol=3e-3)
+    assert np.all(np.abs(cli.zeta[:8] - sim.zeta[:8]) < 3 * cli.zeta_std[:8])
     # the damping growth between levels survives: zeta increases level by level
     assert np.all(np.diff(cli.zeta) > 0)
 

@@ -146,7 +146,8 @@ def test_noise_free_is_exact_on_any_grid_and_quantity():
 
 def test_narrow_band_single_point_with_neighbours_outside():
     """One mode in a band of a few half-power widths; a mode 20 % below the band edge
-    (whose tail U - L/w^2 cannot follow: the pseudo-modes take it) and one above."""
+    (whose tail U - L/w^2 cannot follow: the fixed out-of-band poles take it) and one
+    above."""
     fn = np.array([82.9, 164.9, 422.2])
     zeta = np.array([0.034, 0.043, 0.049])
     phi = np.array([[0.8, 0.7, 0.9]])
@@ -159,11 +160,17 @@ def test_narrow_band_single_point_with_neighbours_outside():
     assert res.fit_error < 0.012                 # at the noise level (1 %)
     off = identify(f, H[:, 0], pseudo_modes=False)
     assert off.fit_error > 0.05                  # what the plain residual terms leave
-    # a band of +-1 half-power width around the mode, noise-free, exact
+    # a band of +-1 half-power width around the mode, noise-free: no room for
+    # out-of-band terms (ident.refine.OUT_OF_BAND_ROOM), so U - L/w^2 stand for the
+    # neighbours' tails. Their second-order term (band / distance)^2 of the tail is the
+    # error: ~1e-4 in frequency, below a rig's 5e-4 repeatability; alone, the mode is exact
     wdth = 2 * zeta[1] * fn[1]
     g = np.linspace(fn[1] - wdth, fn[1] + wdth, 60)
     ef, ez = errors(identify_modes(g, receptance(fn, zeta, phi, g)[:, 0]), fn[1:2], zeta[1:2])
-    assert abs(ef[0]) < 1e-8 and abs(ez[0]) < 1e-6
+    assert 1e-6 < abs(ef[0]) < 1.5e-4 and abs(ez[0]) < 5e-4
+    alone = receptance(fn[1:2], zeta[1:2], phi[:, 1:2], g)[:, 0]
+    ef, ez = errors(identify_modes(g, alone), fn[1:2], zeta[1:2])
+    assert abs(ef[0]) < 1e-10 and abs(ez[0]) < 1e-8
 
 
 def test_n_modes_and_errors():

@@ -181,7 +181,11 @@ def test_force_controlled_narrow_band_one_track_and_warnings(tmp_path, capsys):
     assert np.all(np.diff(d.response_amplitude) > 0)
     top = [w for w in d.warnings if "level 8" in w]
     assert any("band-sensitive" in w for w in top), d.warnings
-    assert "x_fit_error" in d.extra and np.all(d.extra["x_fit_error"] < 0.02)
+    # the one-mode linear fit leaves the joint's distortion of a force-controlled FRF:
+    # 1-2.5 % of the FRF against 0.5 % noise (no out-of-band terms absorb it in a band
+    # this narrow, ident.refine.OUT_OF_BAND_ROOM)
+    assert "x_fit_error" in d.extra and np.all(d.extra["x_fit_error"] < 0.03)
+    assert np.all(d.extra["x_fit_error"] > 0.005)
     for cmd in (["estimate", str(out), "--json"], ["estimate", *paths, "--json"],
                 ["diagnose", *paths, "--json"]):
         assert main(cmd) == 0
