@@ -30,7 +30,8 @@ linearly for every trial (variable projection, :func:`ident.lsfd.lsfd` with a po
 per line; the linear fit's pseudo-modes held). ``(sigma_r, omega_d,r)`` of the pole at
 ``a_r`` and the slopes are fitted by Levenberg-Marquardt from the linear fit's pole
 (the misfit has local minima in ``beta``: one start per :data:`BETA_STARTS`, the best
-kept). Their covariance is the Gauss-Newton one of the projected residual with the
+kept) and polished by Gauss-Newton steps to a Newton decrement below
+:data:`ident.refine.DECREMENT_TOL` (else the linear fit is kept, with a note). Their covariance is the Gauss-Newton one of the projected residual with the
 linear parameters counted (as :mod:`ident.pole_uncertainty`), so ``omega2_std`` and
 ``zeta_std`` include what the slopes cost.
 
@@ -52,7 +53,7 @@ from scipy.optimize import least_squares
 from ident.lsfd import lsfd
 from ident.pole_uncertainty import gauss_newton_covariance, modal_std
 from ident.poles import QUANTITY_POWER, modal_receptance, to_receptance
-from ident.refine import noise_weights
+from ident.refine import DECREMENT_TOL, noise_weights, polish, refine_poles
 
 __all__ = ["mode_amplitudes", "amplitude_poles", "AMPLITUDE_PASSES", "SLOPE_F_LEVEL",
            "BETA_STARTS"]
@@ -189,20 +190,22 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
         sol = min((least_squares(misfit, t0, method="lm", x_scale="jac",
                                  max_nfev=200 * (n_theta + 1)) for t0 in _starts(theta, m)),
                   key=lambda r: r.cost if np.isfinite(r.cost) else np.inf)
-        lines, peak_poles = _line_poles(sol.x, m, sigma0, wd0, u)
-        if not (sol.success and np.all(np.isfinite(sol.fun)) and np.all(peak_poles.real < 0)):
-            return modes, "the amplitude-dependent refit did not converge: linear fit kept"
+        x, dec, chi1, _ = polish(misfit, sol.x, n_lin)
+        lines, peak_poles = _line_poles(x, m, sigma0, wd0, u)
+        if not (dec < DECREMENT_TOL and np.isfinite(chi1) and np.all(peak_poles.real < 0)):
+            return modes, (f"the amplitude-dependent refit did not converge (Newton "
+                           f"decrement {dec:.2g} s^2): linear fit kept")
         if not np.any(theta):
-            if not _significant(2 * _linear_fit(f, Hn, p0, pseudo, wt).cost, sol, m,
+            if not _significant(_linear_fit(f, Hn, p0, pseudo, wt), chi1, m,
                                 2 * K * P - n_lin - n_theta):
                 return modes, ("the amplitude slopes did not lower the misfit significantly "
                                f"(F test at {SLOPE_F_LEVEL:g}): linear fit kept")
-        theta = sol.x
+        theta = x
         allp = np.concatenate([lines, np.broadcast_to(pseudo, (K, pseudo.size))], axis=1)
         residues, fitted, _ = lsfd(f, Hn, allp, wt)
         residues, response = residues[:, :m] * scale[:, None], fitted * scale
         wt = noise_weights(f, Hn, allp)
-    cov = _covariance(misfit, sol.x, sigma0, n_lin)
+    cov = _covariance(misfit, theta, sigma0, n_lin)
     s_w2, s_z = modal_std(peak_poles, cov)
     out = []
     for r, md in enumerate(modes):
@@ -212,31 +215,22 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
             omega2=float(wn**2), zeta=float(-peak_poles[r].real / wn),
             shape=residues[:, r], omega2_std=float(s_w2[r]), zeta_std=float(s_z[r]),
             response_at_peak=float(a_ref[r] * peaks[r][1] ** QUANTITY_POWER[quantity]),
-            omega2_slope=float(sol.x[2 * m + r]), zeta_slope=float(sol.x[3 * m + r])))
+            omega2_slope=float(theta[2 * m + r]), zeta_slope=float(theta[3 * m + r])))
     return out, None
 
 
-def _linear_fit(f, target, p0, pseudo, wt):
-    """The linear model fitted to ``target`` (K, P) from the poles ``p0``, the
-    pseudo-modes held: the least-squares result."""
-    m = p0.size
-    sigma0, wd0 = -p0.real, p0.imag
-
-    def misfit(t):
-        p = -sigma0 * np.exp(t[:m]) + 1j * (wd0 + sigma0 * t[m:])
-        r = lsfd(f, target, np.concatenate([p, pseudo]), wt)[2]
-        return np.concatenate([r.real.ravel(), r.imag.ravel()])
-
-    return least_squares(misfit, np.zeros(2 * m), method="lm", x_scale="jac")
+def _linear_fit(f, target, p0, pseudo, wt) -> float:
+    """chi2 of the linear model fitted to ``target`` (K, P) from the poles ``p0``, the
+    pseudo-modes held (:func:`ident.refine.refine_poles`)."""
+    return refine_poles(f, target, p0, wt, pseudo).chi2
 
 
-def _significant(chi0, sol, m, dof):
+def _significant(chi0, chi1, m, dof):
     """Whether the slopes lower the misfit significantly: the linear model's ``chi0``
-    against ``sol``'s, nested, ``F = ((chi_0 - chi_1)/q) / (chi_1/dof)``, ``q = 3 m``,
-    above the ``1 - ``:data:`SLOPE_F_LEVEL` quantile of ``F(q, dof)``."""
+    against the refit's ``chi1``, nested, ``F = ((chi_0 - chi_1)/q) / (chi_1/dof)``,
+    ``q = 3 m``, above the ``1 - ``:data:`SLOPE_F_LEVEL` quantile of ``F(q, dof)``."""
     from scipy.stats import f as fisher_f
 
-    chi1 = 2 * sol.cost
     if dof <= 0 or not chi1 > 0:
         return False
     return ((chi0 - chi1) / (3 * m)) / (chi1 / dof) > fisher_f.isf(SLOPE_F_LEVEL, 3 * m, dof)

@@ -46,7 +46,7 @@ from scipy.optimize import least_squares
 from ident.lsfd import lsfd
 from ident.poles import modal_to_pole
 
-__all__ = ["Refinement", "Selected", "refine_poles", "refine_selected", "out_of_band_poles",
+__all__ = ["Refinement", "Selected", "polish", "refine_poles", "refine_selected", "out_of_band_poles",
            "band_room", "noise_weights", "OUT_OF_BAND_OFFSETS", "OUT_OF_BAND_F_QUANTILE",
            "OUT_OF_BAND_ROOM",
            "DECREMENT_TOL"]
@@ -152,7 +152,7 @@ def _decrement(residual, theta, n_linear):
     return dec, step, chi2
 
 
-def _polish(residual, theta, n_linear):
+def polish(residual, theta, n_linear: int):
     """Gauss-Newton steps with step halving from ``theta`` until the Newton decrement
     is below :data:`DECREMENT_TOL` (or :data:`POLISH_STEPS` are spent, or no step
     descends). Returns (theta, decrement, chi2, residual evaluations)."""
@@ -197,7 +197,7 @@ def refine_poles(freq_hz, frf, poles, weights=None, fixed=()) -> Refinement:
                                            -poles.real, poles.imag)
     sol = least_squares(residual, np.zeros(2 * m), method="lm", x_scale=1.0,
                         ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=200 * (2 * m + 1))
-    theta, dec, chi2, n_eval = _polish(residual, sol.x, n_linear)
+    theta, dec, chi2, n_eval = polish(residual, sol.x, n_linear)
     return Refinement(unpack(theta), chi2, dec, bool(dec < DECREMENT_TOL),
                       n_eval + int(sol.nfev))
 
