@@ -52,11 +52,11 @@ from threadpoolctl import threadpool_limits
 from ident.lscf import StabilizationDiagram, chain_representatives, lscf_poles, stabilization
 from ident.lsfd import lsfd
 from ident.pole_selection import (candidates, near_threshold, one_resonance_pair, physical,
-                                  roles, significant)
+                                  roles, runaway, significant)
 from ident.pole_uncertainty import modal_std, pole_covariance
 from ident.poles import pole_to_modal, to_receptance
-from ident.refine import (DECREMENT_TOL, OUT_OF_BAND_ROOM, noise_weights, refine_poles,
-                          refine_selected)
+from ident.refine import (DECREMENT_TOL, OUT_OF_BAND_ROOM, noise_variance, noise_weights,
+                          refine_poles, refine_selected)
 
 
 @dataclass
@@ -168,19 +168,26 @@ WEIGHT_TOL = 1e-7
 def _settle(f, Hn, poles, pseudo, Wt, noise_model):
     """The chosen model refitted to convergence: the poles refined with the
     out-of-band terms held (:func:`ident.refine.refine_poles`), and, with
-    ``noise_model``, the noise-model weights recomputed from each fit until the poles
-    move by less than :data:`WEIGHT_TOL` of their half-power half-width (a fixed point
-    of the weighted fit; the weights then belong to the poles they weight).
+    ``noise_model``, the noise variance recomputed from each fit until the poles move
+    by less than :data:`WEIGHT_TOL` of their half-power half-width (a fixed point of
+    the weighted fit; the weights then belong to the poles they weight). A pass that
+    does not shrink the move by 0.7 halves the relaxation of the variance (a noise
+    model of a deterministic misfit can flip between two states, a two-cycle).
     Returns (poles, weights, the last refinement, a note or None)."""
     ref = refine_poles(f, Hn, poles, Wt, pseudo)
-    moved = 0.0
+    moved, before, relax, var = 0.0, np.inf, 1.0, None
     for _ in range(WEIGHT_PASSES if noise_model else 0):
-        Wt = noise_weights(f, Hn, np.concatenate([ref.poles, pseudo]))
+        new_var = noise_variance(f, Hn, np.concatenate([ref.poles, pseudo]))
+        var = new_var if var is None else (1 - relax) * var + relax * new_var
+        Wt = 1.0 / np.sqrt(var)
         new = refine_poles(f, Hn, ref.poles, Wt, pseudo)
         moved = float(np.max(np.abs(new.poles - ref.poles) / np.abs(ref.poles.real)))
         ref = new
         if moved < WEIGHT_TOL:
             break
+        if moved > 0.7 * before:
+            relax = max(relax / 2, 1 / 16)
+        before = moved
     note = None
     if not ref.converged:
         note = (f"the refinement did not converge (Newton decrement {ref.decrement:.2g} "
@@ -189,6 +196,59 @@ def _settle(f, Hn, poles, pseudo, Wt, noise_model):
         note = (f"the noise-model weights did not settle in {WEIGHT_PASSES} passes (the "
                 f"poles still moved {moved:.2g} half-widths): they may move with round-off")
     return ref.poles, Wt, ref, note
+
+
+def _fit(f, Hn, Wt, p, ob_band):
+    """Refined poles, out-of-band poles and near-threshold notes of
+    :func:`ident.refine.refine_selected`."""
+    sel = refine_selected(f, Hn, p, Wt, ob_band)
+    notes = [near_threshold("F-test of the out-of-band terms", sel.f_stat, sel.f_crit)]
+    notes += [near_threshold(f"room {side} the modes for out-of-band terms (decay rates)",
+                             room, OUT_OF_BAND_ROOM)
+              for side, room in zip(("below", "above"), sel.room)]
+    return sel.poles, sel.pseudo, [n for n in notes if n]
+
+
+def _select(f, Hn, Wt, poles, stab, n_modes, ob_band, band_w, peak_w, dw):
+    """Refine the candidates and drop what :mod:`ident.pole_selection` rejects, one
+    step at a time, until every pole stays: a runaway pole (the one that moved the
+    most) is dropped and the rest refined again from their starts; non-physical,
+    insignificant or doubled poles are dropped and the rest refined from where they
+    are. Returns (poles, stability, nuisance, out-of-band poles, notes)."""
+    pseudo, notes = np.zeros(0, complex), []
+    nuisance = np.zeros(poles.size, bool)
+    for _ in range(4 + poles.size):
+        if not poles.size:
+            break
+        new, pseudo, notes = _fit(f, Hn, Wt, poles, ob_band)
+        moved = runaway(poles, new)
+        if moved.any():
+            keep = np.ones(poles.size, bool)
+            keep[np.argmax(np.abs(new - poles) / np.abs(poles.real))] = False
+            poles, stab = poles[keep], stab[keep]
+            continue
+        poles = new
+        keep, _ = physical(poles, band_w, peak_w, dw)
+        nuisance = np.zeros(poles.size, bool)
+        if n_modes is not None and keep.any():
+            ok = keep.copy()
+            keep[ok], nuisance[ok] = roles(f, Hn, poles[ok], pseudo, Wt, n_modes, band_w)
+        if n_modes is None and keep.any():
+            sig, F, crit = significant(f, Hn, poles[keep], pseudo, Wt)
+            notes += [near_threshold(f"F-test of the pole at {abs(pk) / (2 * np.pi):.6g} Hz",
+                                     Fk, crit) for pk, Fk in zip(poles[keep], F)]
+            keep[keep] = sig
+            if keep.all():
+                keep, tests = one_resonance_pair(f, Hn, poles, pseudo, Wt,
+                                                 lambda p: _fit(f, Hn, Wt, p, ob_band)[:2])
+                notes += [near_threshold(
+                    f"F-test of two poles on one resonance ({abs(poles[i]) / (2 * np.pi):.6g}, "
+                    f"{abs(poles[j]) / (2 * np.pi):.6g} Hz)", Fk, crit)
+                    for (i, j), Fk, crit in tests]
+        if keep.all():
+            break
+        poles, stab, nuisance = poles[keep], stab[keep], nuisance[keep]
+    return poles, stab, nuisance, pseudo, [n for n in notes if n]
 
 
 @_one_blas_thread
@@ -246,52 +306,17 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
     dw = float(np.diff(w).max())
     band_w = (w[0], w[-1])
     poles, stab = candidates(rep, count, max_order, n_modes, w[peaks], dw, band_w)
-    nuisance = np.zeros(poles.size, bool)
 
     Wt = None if weighting == "uniform" else 1.0 / np.maximum(np.abs(Hn), 1e-300)
     ob_band = band_w if pseudo_modes else None
     notes = []
-
-    def fit(p):
-        sel = refine_selected(f, Hn, p, Wt, ob_band)
-        notes = [near_threshold("F-test of the out-of-band terms", sel.f_stat, sel.f_crit)]
-        notes += [near_threshold(f"room {side} the modes for out-of-band terms (decay rates)",
-                                 room, OUT_OF_BAND_ROOM)
-                  for side, room in zip(("below", "above"), sel.room)]
-        return sel.poles, sel.pseudo, [n for n in notes if n]
-
-    pseudo = np.zeros(0, complex)
     for stage in range(2):
-        stage_notes = []
-        for _ in range(4):      # refine; drop runaway / insignificant poles; refine again
-            if not poles.size:
-                break
-            poles, pseudo, stage_notes = fit(poles)
-            keep, _ = physical(poles, band_w, w[peaks], dw)
-            nuisance = np.zeros(poles.size, bool)
-            if n_modes is not None and keep.any():
-                ok = keep.copy()
-                keep[ok], nuisance[ok] = roles(f, Hn, poles[ok], pseudo, Wt, n_modes, band_w)
-            if n_modes is None and keep.any():
-                sig, F, crit = significant(f, Hn, poles[keep], pseudo, Wt)
-                stage_notes += [near_threshold(f"F-test of the pole at "
-                                               f"{abs(pk) / (2 * np.pi):.6g} Hz", Fk, crit)
-                                for pk, Fk in zip(poles[keep], F)]
-                keep[keep] = sig
-                if keep.all():
-                    keep, tests = one_resonance_pair(f, Hn, poles, pseudo, Wt,
-                                                     lambda p: fit(p)[:2])
-                    stage_notes += [near_threshold(
-                        f"F-test of two poles on one resonance ({abs(poles[i]) / (2 * np.pi):.6g}"
-                        f", {abs(poles[j]) / (2 * np.pi):.6g} Hz)", Fk, crit)
-                        for (i, j), Fk, crit in tests]
-            if keep.all():
-                break
-            poles, stab, nuisance = poles[keep], stab[keep], nuisance[keep]
+        poles, stab, nuisance, pseudo, stage_notes = _select(
+            f, Hn, Wt, poles, stab, n_modes, ob_band, band_w, w[peaks], dw)
         if weighting != "auto" or stage == 1 or not poles.size:
             break
         Wt = noise_weights(f, Hn, np.concatenate([poles, pseudo]))
-    notes += [n for n in stage_notes if n]
+    notes += stage_notes
     near = np.zeros(poles.size, bool)
     if poles.size:
         poles, Wt, ref, note = _settle(f, Hn, poles, pseudo, Wt, weighting == "auto")

@@ -16,6 +16,8 @@ chains, and the tests that keep or drop a refined pole.
   within :data:`NEAR_BAND_REACH` decay rates of an edge: a mode outside the band whose
   skirt the band holds, refined with the modes (its LSCF chain gives a well-posed
   start) but not returned (*near-band*).
+* :func:`runaway`: a pole the refinement moved by more than :data:`RUNAWAY` of its
+  half-power half-widths is dropped (its start was not near an optimum).
 * :func:`significant`: dropping the pole (others fixed, residues refitted) raises the
   weighted misfit significantly (an F-test with a look-elsewhere quantile) and its
   fitted peak is above 1 % of the local FRF level.
@@ -33,9 +35,11 @@ from ident.lscf import LINK_MAC, NEAR_BAND_REACH, STABLE_FREQ, ZETA_MAX
 from ident.lsfd import lsfd
 from ident.poles import mac, pole_to_modal
 
-__all__ = ["candidates", "roles", "physical", "significant", "one_resonance_pair", "near_threshold",
+__all__ = ["candidates", "roles", "runaway", "physical", "significant", "one_resonance_pair", "near_threshold",
            "NEAR_BAND_REACH", "NEAR_MARGIN", "F_LEVEL"]
 
+#: Largest move of a pole in one refinement, in half-power half-widths of its start.
+RUNAWAY = 5.0
 #: A statistic within this relative distance of its threshold is reported as near it.
 NEAR_MARGIN = 0.1
 #: Level of the F-tests that keep a pole, divided by the number of lines K
@@ -110,6 +114,15 @@ def roles(f, Hn, p, ps, Wt, n_modes, band_w):
     nuisance = apart & ~np.isin(np.arange(p.size), modes)
     keep = nuisance | np.isin(np.arange(p.size), modes)
     return keep, nuisance
+
+
+def runaway(start, p) -> np.ndarray:
+    """Poles that the refinement moved by more than :data:`RUNAWAY` half-power
+    half-widths of their start (``|p - start| > RUNAWAY |Re start|``): a start outside
+    the basin of an optimum near it (a noise pole of LSCF that the fit drags across
+    the band onto another resonance, where round-off decides which side it lands)."""
+    start, p = np.asarray(start, complex), np.asarray(p, complex)
+    return np.abs(p - start) > RUNAWAY * np.abs(start.real)
 
 
 def physical(p, band_w, peak_w, dw):

@@ -47,7 +47,7 @@ from ident.lsfd import lsfd
 from ident.poles import modal_to_pole
 
 __all__ = ["Refinement", "Selected", "polish", "refine_poles", "refine_selected", "out_of_band_poles",
-           "band_room", "noise_weights", "OUT_OF_BAND_OFFSETS", "OUT_OF_BAND_F_QUANTILE",
+           "band_room", "noise_variance", "noise_weights", "OUT_OF_BAND_OFFSETS", "OUT_OF_BAND_F_QUANTILE",
            "OUT_OF_BAND_ROOM",
            "DECREMENT_TOL"]
 
@@ -103,7 +103,8 @@ def band_room(band_w, poles) -> np.ndarray:
     poles = np.asarray(poles, complex)
     wn, sigma = np.abs(poles), -poles.real
     i, j = np.argmin(wn), np.argmax(wn)
-    return np.array([(wn[i] - band_w[0]) / sigma[i], (band_w[1] - wn[j]) / sigma[j]])
+    with np.errstate(over="ignore", divide="ignore"):
+        return np.array([(wn[i] - band_w[0]) / sigma[i], (band_w[1] - wn[j]) / sigma[j]])
 
 
 def _projected_residual(freq_hz, frf, weights, fixed, sigma0, wd0):
@@ -114,7 +115,8 @@ def _projected_residual(freq_hz, frf, weights, fixed, sigma0, wd0):
     big = [None]
 
     def poles(theta):
-        return -sigma0 * np.exp(theta[:m]) + 1j * (wd0 + sigma0 * theta[m:])
+        with np.errstate(over="ignore", invalid="ignore"):
+            return -sigma0 * np.exp(theta[:m]) + 1j * (wd0 + sigma0 * theta[m:])
 
     def residual(theta):
         allp = np.concatenate([poles(theta), fixed])
@@ -202,15 +204,16 @@ def refine_poles(freq_hz, frf, poles, weights=None, fixed=()) -> Refinement:
                       n_eval + int(sol.nfev))
 
 
-def noise_weights(freq_hz, frf, poles):
-    """Weights 1/sigma_k of a noise model fitted to the residuals of the modal model.
+def noise_variance(freq_hz, frf, poles) -> np.ndarray:
+    """Variance sigma_k^2 (K, P) of a noise model fitted to the residuals of the modal
+    model with ``poles``.
 
     ``sigma_k^2 = a^2 |H_fit,k|^2 + b^2`` (noise proportional to the FRF plus a floor),
     a^2, b^2 >= 0 by non-negative least squares of the squared residuals |H - H_fit|^2
     on (|H_fit|^2, 1), all points pooled (each point scaled to unit rms). For noise
     proportional to |H| this is the maximum-likelihood weighting with the fitted rather
     than the noisy |H|; an additive floor stops noisy low-level lines (anti-resonances,
-    far from the modes) from dominating the fit."""
+    far from the modes) from dominating the fit. ``|H|^2`` where the fit fails."""
     from scipy.optimize import nnls
 
     _, fitted, _ = lsfd(freq_hz, frf, poles, 1.0 / np.maximum(np.abs(frf), 1e-300))
@@ -223,8 +226,13 @@ def noise_weights(freq_hz, frf, poles):
     floor = 1e-12 * np.mean(g2)
     sigma2 = a2 * np.abs(fitted) ** 2 + max(b2, floor)
     if not np.all(np.isfinite(sigma2)) or a2 + b2 <= 0:
-        return 1.0 / np.maximum(np.abs(frf), 1e-300)
-    return 1.0 / np.sqrt(sigma2)
+        return np.maximum(np.abs(frf), 1e-300) ** 2
+    return sigma2
+
+
+def noise_weights(freq_hz, frf, poles) -> np.ndarray:
+    """Weights ``1 / sigma_k`` of :func:`noise_variance`."""
+    return 1.0 / np.sqrt(noise_variance(freq_hz, frf, poles))
 
 
 @dataclass

@@ -164,7 +164,8 @@ def test_measured_mode_is_the_resonance_of_the_model_frf():
                   for w in 2 * np.pi * f])
     (ident,) = identify_modes(f, H, band=(240.0, 264.0))     # one resonance in the band
     assert ident.frequency_hz == pytest.approx(m["frequency_hz"], rel=1e-7)
-    assert ident.zeta == pytest.approx(zeta, rel=1e-6)
+    # the fixed out-of-band terms stand for the other modes' tails: 1.8e-6 in zeta
+    assert ident.zeta == pytest.approx(zeta, rel=1e-5)
     assert 1e-3 < m["glue_slip"] < 1e-2
     # the measured relative frequency drop (Table 4, exp. 1 -> 10) must be reachable in
     # micro-slip: drop = p d / (1 - d) with glue softening d < 1/3

@@ -193,29 +193,34 @@ def test_force_controlled_narrow_band_one_track_and_warnings(tmp_path, capsys):
         assert any("level 8" in w and "band-sensitive" in w for w in res["data_warnings"])
 
 
-def test_two_poles_on_one_resonance_are_refitted_as_one(tmp_path):
-    """A level whose automatic selection puts two poles on the one resonance (seeded
-    noise on a force-controlled FRF; the precondition is asserted) is identified again
-    with one pole: one track, and the level says so in its warnings."""
-    w0 = 2 * np.pi * F0
-    joint = IwanParameters(chi=-0.5, K_T=0.2 * w0 ** 2, F_S=0.2e-4 * w0 ** 2, beta=1.0)
-    chain = JointedChain(m=[1.0], k=[0.8 * w0 ** 2], c=[2 * 0.005 * w0], joint=joint)
-    paths, levels = write_series(tmp_path, chain, "force", np.geomspace(0.01, 0.3, 5), 8)
-    f = levels[0].freq_hz
-    for seed in range(40):       # the lowest level: find a realization with two poles
-        H, F = noisy(levels[0], np.random.default_rng(seed), 0.005, 1e-4)
-        if len(identify(f, H).modes) == 2:
-            break
-    else:
-        pytest.fail("no seed gives two poles at the lowest level (identification changed?)")
-    write_level(paths[0], levels[0], H, F, run_order=5)
-    fits = identify_series(read_series_sets(paths), check_band=False)
-    assert [len(fit.result.modes) for fit in fits] == [1] * 5
-    assert "one resonance: identified with 1" in fits[0].warnings[0][0]
-    d = series_table(fits)
-    assert list(d.modes) == [1] and len(d) == 5
-    assert any("level 1, mode 1: two poles within one half-power width" in w
-               for w in d.warnings)
+def test_two_poles_on_one_resonance_are_refitted_as_one():
+    """A level whose automatic selection put two poles on the one resonance (closer than
+    the larger half-power half-width) is identified again with one pole, and says so.
+    Stand-in levels: since session 19 the identification of the project's distorted
+    force-controlled series no longer fits two poles to one resonance (a pole the
+    refinement drags across the band is dropped, ident.pole_selection.runaway), so
+    the rule is checked on the levels it acts on."""
+    from types import SimpleNamespace
+
+    from ident.tracking import agree_on_modes
+
+    def mode(f, z=0.006):
+        return SimpleNamespace(frequency_hz=f, zeta=z, shape=np.array([1.0]))
+
+    one = SimpleNamespace(modes=[mode(80.0)])
+    two = SimpleNamespace(modes=[mode(79.9), mode(80.3, 0.01)])     # 0.4 < 0.8 Hz
+    apart = SimpleNamespace(modes=[mode(79.9), mode(82.0)])         # 2.1 > 0.8 Hz
+    asked = []
+
+    def refit(k, n):
+        asked.append((k, n))
+        return SimpleNamespace(modes=[mode(79.95)])
+
+    results, notes = agree_on_modes([one, two, one, apart, one], refit)
+    assert asked[0] == (1, 1) and [len(r.modes) for r in results] == [1] * 5
+    assert notes[1] == ["two poles within one half-power width (79.9, 80.3 Hz) are one "
+                        "resonance: identified with 1"]
+    assert notes[3][0].startswith("automatic selection found 2 modes (79.9, 82 Hz)")
 
 
 def test_a_level_with_an_extra_mode_is_refitted_with_the_common_count(tmp_path):
