@@ -46,7 +46,7 @@ CLI then runs BLAS on one thread). A probe in each configuration prints the kern
 (``architecture``) and thread count threadpoolctl reports, and says when a configuration
 did not take effect or ran the same BLAS as the first.
 
-    .venv/bin/python benchmarks/blas_repro.py                           # all, ~6 min
+    .venv/bin/python benchmarks/blas_repro.py                           # all, 8-10 min
     .venv/bin/python benchmarks/blas_repro.py --workloads identify --configs default,Haswell
     .venv/bin/python benchmarks/blas_repro.py --compare-only            # re-read the last run
 """
