@@ -11,6 +11,11 @@ Iwan joint (Segalman 2005: phi_max, R, S, micro-slip dissipation
 quadrature over the sliders, each an elastic-perfectly-plastic element whose
 first-harmonic stiffness is ``(theta - sin(2 theta)/2) / pi``, ``cos theta = 1 - 2 phi/A``
 (Caughey 1960): an integral the code under test does not compute this way.
+
+The pins (``constraints.txt``, what ``make install/run/test`` install and CI tests): every
+dependency, test extra and build requirement of ``pyproject.toml`` has one ``==`` line, and
+each pinned version lies in the range ``pyproject.toml`` allows (truth: the ranges as
+``packaging`` reads them, PEP 440/508).
 """
 from __future__ import annotations
 
@@ -181,3 +186,98 @@ def test_installed_wheel_runs_joint_command(wheel):
     for key in ("dissipation_per_cycle", "stiffness_quadrature"):
         assert amp[key] == pytest.approx(truth[key], rel=1e-12), key
     assert amp["stiffness_in_phase"] == pytest.approx(truth["stiffness_in_phase"], rel=1e-9)
+
+
+PINS = ROOT / "constraints.txt"
+
+
+def _pins(text: str) -> dict:
+    """{canonical name: version} of a constraints file's ``==`` lines; any other
+    non-comment line, or a name pinned twice, fails."""
+    from packaging.utils import canonicalize_name
+
+    pins, bad = {}, []
+    for line in text.splitlines():
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        name, sep, version = line.partition("==")
+        key = canonicalize_name(name.strip())
+        if (not sep or not version.strip() or key in pins
+                or any(c in version for c in "<>=!~,;* ")):
+            bad.append(line)
+            continue
+        pins[key] = version.strip()
+    assert not bad, f"constraints lines that are not one exact pin each: {bad}"
+    return pins
+
+
+def _project_requirements(text: str):
+    """(where, Requirement) of a pyproject.toml: dependencies, every optional extra and
+    the build system's requirements."""
+    import tomllib
+    from packaging.requirements import Requirement
+
+    meta = tomllib.loads(text)
+    project = meta["project"]
+    out = [("dependencies", Requirement(r)) for r in project["dependencies"]]
+    for extra, reqs in project.get("optional-dependencies", {}).items():
+        out += [(f"extra {extra}", Requirement(r)) for r in reqs]
+    out += [("build-system", Requirement(r)) for r in meta["build-system"]["requires"]]
+    return out
+
+
+def _unpinned(pins, reqs) -> list:
+    from packaging.utils import canonicalize_name
+
+    return [f"{r.name} ({where})" for where, r in reqs if canonicalize_name(r.name) not in pins]
+
+
+def _outside(pins, reqs) -> list:
+    """Pins outside their requirement's range (pre-releases count as versions)."""
+    from packaging.utils import canonicalize_name
+    from packaging.version import Version
+
+    out = []
+    for where, r in reqs:
+        version = pins.get(canonicalize_name(r.name))
+        if version is not None and not r.specifier.contains(Version(version), prereleases=True):
+            out.append(f"{r.name}=={version} outside {r} ({where})")
+    return out
+
+
+def _repository():
+    return _pins(PINS.read_text()), _project_requirements((ROOT / "pyproject.toml").read_text())
+
+
+def test_constraints_pin_every_requirement_of_pyproject():
+    pins, reqs = _repository()
+    assert {where for where, _ in reqs} >= {"dependencies", "extra test", "build-system"}
+    assert not _unpinned(pins, reqs), f"not pinned in constraints.txt: {_unpinned(pins, reqs)}"
+    assert "pip" in pins, "constraints.txt does not pin pip"
+
+
+def test_pinned_versions_satisfy_pyproject_ranges():
+    pins, reqs = _repository()
+    assert not _outside(pins, reqs), "\n".join(_outside(pins, reqs))
+
+
+def test_pin_checks_find_a_missing_pin_a_pin_outside_its_range_and_a_loose_line():
+    """The checks on a made-up pair of files: a name not pinned, a version below its
+    range, a name spelled differently (PEP 503: same package), a range instead of a pin."""
+    project = """
+[build-system]
+requires = ["setuptools>=77"]
+[project]
+dependencies = ["numpy>=1.26", "sdypy-ema>=0.28"]
+[project.optional-dependencies]
+test = ["pytest>=7.4"]
+"""
+    reqs = _project_requirements(project)
+    pins = _pins("# header\nnumpy==1.25.2\nsdypy_EMA==0.31.0  # comment\nsetuptools==84.2.1\n")
+    assert _unpinned(pins, reqs) == ["pytest (extra test)"]
+    assert _outside(pins, reqs) == ["numpy==1.25.2 outside numpy>=1.26 (dependencies)"]
+    with pytest.raises(AssertionError, match="not one exact pin"):
+        _pins("numpy>=1.26\n")
+    with pytest.raises(AssertionError, match="not one exact pin"):
+        _pins("numpy==2.4.6\nNumPy==2.4.5\n")
