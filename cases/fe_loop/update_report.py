@@ -11,9 +11,11 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from statistics import NormalDist
 
 import numpy as np
 
+from cases.digits import fmt_interval
 from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
 from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
@@ -186,10 +188,13 @@ def format_text(s: dict) -> str:
              f"          status / kind"]
     for name, p in s["parameters"].items():
         iv = p.get("interval")
-        ivs = f"{_fmt(iv[0])} .. {_fmt(iv[1])}" if iv else ""
+        # to the digits the interval supports (cases.digits); JSON keeps them all
+        value, lo, hi = fmt_interval(p["value"], *(iv or (None, None)), fallback=".7g",
+                                     z=NormalDist().inv_cdf(0.5 + s["confidence"] / 2))
+        ivs = f"{lo} .. {hi}" if iv else ""
         ab = f" / at {p['at_bound']} bound" if p.get("at_bound") else ""
         start = f" from {p['start']:.4g}" if "start" in p else ""
-        lines.append(f"{_LABEL.get(name, name):26s} {p['value']:14.7g}  {ivs:28s} "
+        lines.append(f"{_LABEL.get(name, name):26s} {value:>14s}  {ivs:28s} "
                      f"{p.get('status', '')} / {p['kind']}{start}{ab}")
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
