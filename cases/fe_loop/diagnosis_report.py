@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.digits import fmt_interval
+from cases.fe_loop.digits import fmt_interval
 from inverse.diagnosis.report import own_scatter_sentence
 
 __all__ = ["add_fe_diagnosis", "format_fe", "write_fe_files"]

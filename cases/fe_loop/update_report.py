@@ -15,7 +15,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from cases.digits import fmt_interval
+from cases.fe_loop.digits import fmt, fmt_interval
 from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
 from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
@@ -188,7 +188,7 @@ def format_text(s: dict) -> str:
              f"          status / kind"]
     for name, p in s["parameters"].items():
         iv = p.get("interval")
-        # to the digits the interval supports (cases.digits); JSON keeps them all
+        # to the digits the interval supports (cases.fe_loop.digits); JSON keeps them all
         value, lo, hi = fmt_interval(p["value"], *(iv or (None, None)), fallback=".7g",
                                      z=NormalDist().inv_cdf(0.5 + s["confidence"] / 2))
         ivs = f"{lo} .. {hi}" if iv else ""
@@ -230,12 +230,18 @@ def format_text(s: dict) -> str:
     if s["assumptions"]:
         lines.append("assumed properties changed (refitted): dchi2, top held-out level shift "
                      "[Hz], [% zeta], top slip/phi_max")
+        # the shifts to one digit of the top level's noise sd: a shift is read against it,
+        # and below a tenth of it it is the refits' convergence (1e-6 Hz, 1e-3 % that move
+        # with the BLAS kernel), not the assumption's effect
+        top = s["levels"][-1]["measured"]
+        sd_f = n["sigma_omega2"][-1] / (2 * (2 * math.pi) ** 2 * top["frequency_hz"])
+        sd_z = 100 * n["sigma_zeta"][-1] / top["zeta"]
         for a in s["assumptions"]:
             zeta_shift = (None if a['shift_top_zeta_rel'] is None
                           else 100 * a['shift_top_zeta_rel'])
             lines.append(f"  {a['assumption']:28s} {a['delta_chi2']:+9.2f} "
-                         f"{_fmt(a['shift_top_frequency_hz'], 3):>10s} "
-                         f"{_fmt(zeta_shift, 3):>8s}"
+                         f"{fmt(a['shift_top_frequency_hz'], sd_f, '.3g', 1):>10s} "
+                         f"{fmt(zeta_shift, sd_z, '.3g', 1):>8s}"
                          f" {a['top_slip_over_phi_max']:9.3g}")
     t = s["timing_s"]
     lines.append(f"time: {t['total']:.1f} s ({s['executor']})")

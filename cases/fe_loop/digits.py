@@ -39,16 +39,17 @@ def interval_sd(value, lo, hi, z: float = Z95) -> float | None:
 
 
 def fmt(value, sd, fallback: str = ".6g", digits: int = SD_DIGITS) -> str:
-    """``value`` to the decimal that :func:`decimals` gives for ``sd`` (fixed point, or
-    with an exponent for |value| >= 1e6 or < 1e-4); ``format(value, fallback)`` without a
-    usable ``sd``; ``"open"`` for None."""
+    """``value`` to the decimal that :func:`decimals` gives for ``sd``: fixed point
+    (``0.0000`` for a value below that decimal), with an exponent where that would take
+    more than 8 decimals or |value| >= 1e6; ``format(value, fallback)`` without a usable
+    ``sd``; ``"open"`` for None."""
     if value is None:
         return "open"
     d = decimals(sd, digits)
     if d is None or not math.isfinite(value):
         return format(value, fallback)
     mag = abs(value)
-    if mag >= 1e6 or 0.0 < mag < 1e-4:
+    if mag >= 1e6 or (d > 8 and mag > 0.0):
         significant = max(1, math.floor(math.log10(mag)) + d + 1)
         return f"{value:.{significant - 1}e}"
     if d <= 0:
