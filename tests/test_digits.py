@@ -24,5 +24,5 @@ def test_without_an_interval_the_callers_format_stays():
 
 def test_a_shift_below_the_noise_prints_as_zero():
     assert fmt(3.91e-07, 3.6e-4, ".3g", 1) == "0.0000"
-    assert fmt(-0.00118, 0.074, ".3g", 1) == "-0.00"
+    assert fmt(-0.00118, 0.074, ".3g", 1) == "0.00"        # no "-0.00"
     assert fmt(0.0123, 3.6e-4, ".3g", 1) == "0.0123"

@@ -52,9 +52,8 @@ def fmt(value, sd, fallback: str = ".6g", digits: int = SD_DIGITS) -> str:
     if mag >= 1e6 or (d > 8 and mag > 0.0):
         significant = max(1, math.floor(math.log10(mag)) + d + 1)
         return f"{value:.{significant - 1}e}"
-    if d <= 0:
-        return f"{round(value, d):.0f}"
-    return f"{value:.{d}f}"
+    text = f"{round(value, d):.0f}" if d <= 0 else f"{value:.{d}f}"
+    return text.lstrip("-") if float(text) == 0.0 else text     # no "-0.00"
 
 
 def fmt_interval(value, lo, hi, fallback: str = ".6g", z: float = Z95) -> tuple[str, str, str]:
