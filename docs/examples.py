@@ -296,7 +296,7 @@ TOLERANCES = (
 class Mismatch:
     """A number outside its tolerance: where and by how much."""
 
-    line: int          # index in the page block
+    line: int          # line number (of the page file, or of the block from 1)
     text: str          # the page's line
     index: int         # which number of the line (0-based)
     page: str
@@ -306,7 +306,7 @@ class Mismatch:
 
     def __str__(self) -> str:
         diff = abs(float(self.got) - float(self.page))
-        return (f"line {self.line + 1}, number {self.index + 1} ({self.quantity}): page "
+        return (f"line {self.line}, number {self.index + 1} ({self.quantity}): page "
                 f"{self.page}, command {self.got}: |diff| {diff:.3g} > tolerance "
                 f"{self.tol:.3g}\n    {self.text}")
 
@@ -344,9 +344,9 @@ def tolerances_of(line: str, spans, options: dict) -> list[tuple[float, float, s
     return out
 
 
-def compare_line(page: str, got: str, options: dict | None = None, where: int = 0):
+def compare_line(page: str, got: str, options: dict | None = None, where: int = 1):
     """The numbers of ``got`` outside their tolerance against ``page`` (two lines of one
-    skeleton), as :class:`Mismatch` es."""
+    skeleton; ``where``: the line's number), as :class:`Mismatch` es."""
     spans = [m.span() for m in NUMBER.finditer(page)]
     want = [page[a:b] for a, b in spans]
     have = NUMBER.findall(got)
@@ -360,10 +360,12 @@ def compare_line(page: str, got: str, options: dict | None = None, where: int = 
     return out
 
 
-def compare(page: list[str], got: list[str], options: dict | None = None) -> list[str]:
+def compare(page: list[str], got: list[str], options: dict | None = None,
+            first_line: int = 1) -> list[str]:
     """What differs between a block's lines on the page and the command's: lines whose
     words or layout differ (a unified diff), numbers outside their tolerance (named, with
-    both values and the tolerance). Empty when they agree. Timings are ignored."""
+    both values and the tolerance; ``first_line``: the page line number of the block's
+    first line). Empty when they agree. Timings are ignored."""
     a, b = normalized(page), normalized(got)
     sa, sb = [skeleton(x) for x in a], [skeleton(x) for x in b]
     problems = []
@@ -371,9 +373,10 @@ def compare(page: list[str], got: list[str], options: dict | None = None) -> lis
     for op, i1, i2, j1, j2 in matcher.get_opcodes():
         if op == "equal":
             for i, j in zip(range(i1, i2), range(j1, j2)):
-                problems += [str(m) for m in compare_line(a[i], b[j], options, i)]
+                problems += [str(m) for m in compare_line(a[i], b[j], options,
+                                                          first_line + i)]
         else:
-            problems.append("\n".join(["words or layout differ:"]
+            problems.append("\n".join([f"line {first_line + i1}: words or layout differ:"]
                                       + [f"  - {x}" for x in a[i1:i2]]
                                       + [f"  + {x}" for x in b[j1:j2]]))
     return problems
@@ -436,13 +439,12 @@ def process(path: Path, args, machine: str) -> int:
                    for line in run_example(ex, session)]
             print(f"ran {ex.commands[-1][1]} ({time.perf_counter() - t0:.1f} s)",
                   file=sys.stderr)
-            problems = compare(ex.lines, got, ex.options)
+            problems = compare(ex.lines, got, ex.options, ex.fence_open + 2)
             if problems:
                 drift.append((ex, problems))
             new[ex.fence_open] = got
     for ex, problems in drift:
-        print(f"{name}:{ex.fence_open + 2}: `{ex.commands[0][1]}` ... drifted "
-              f"(block lines counted from its first line):")
+        print(f"{name}:{ex.fence_open + 2}: the example of `{ex.commands[0][1]}` drifted:")
         print("\n".join("  " + p.replace("\n", "\n  ") for p in problems))
     if args.check:
         return len(drift)
