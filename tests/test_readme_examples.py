@@ -3,7 +3,9 @@
 
 Runs every example not marked ``slow`` (``gl`` ones only where off-screen rendering
 works) in a scratch folder and compares with the pages, ignoring only timings and the
-scratch folder's path. On drift: ``python docs/examples.py`` rewrites the pages.
+scratch folder's path: words and layout exactly, each number within its stated tolerance
+(docs/examples.py ``compare``, ``TOLERANCES``), the same on every machine. On drift:
+``python docs/examples.py`` rewrites the pages.
 """
 from __future__ import annotations
 
