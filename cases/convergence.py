@@ -29,7 +29,10 @@ from fe.modal import normal_modes
 STRIP = Section(E=70.0e9, rho=2700.0, width=0.05, thickness=1.0e-3)
 STRIP_LENGTH = 0.35
 CANTILEVER_ELEMENTS = (2, 4, 8, 16, 32, 64, 128, 256, 512)
-ROUNDOFF_MARGIN = 10.0  # an error counts as truncation if above 10 x the round-off estimate
+#: an error counts as truncation if above this many times its round-off bound (the
+#: componentwise bound of cases.case_convergence.roundoff_floor: the same on every
+#: machine; the two-shift sample of the round-off moved by 100x between BLAS kernels)
+ROUNDOFF_MARGIN = 3.0
 DOUBLE_BEAM_ELEMENT_SIZES = (0.02, 0.01, 0.005, 0.0025, 0.00125)
 DOUBLE_BEAM_JOINTS = (2, 3, 5, 9, 17, 33)
 
@@ -67,12 +70,13 @@ def cantilever_model(section: Section, length: float, n_elements: int):
 
 
 def cantilever_bending_frequencies(section: Section, length: float, n_elements: int,
-                                   n_modes: int, sigma: float = -1.0) -> np.ndarray:
+                                   n_modes: int, sigma: float = -1.0, floor: bool = False):
     """Lowest ``n_modes`` bending frequencies (rad/s) of the FE cantilever.
 
     ``sigma`` is the shift-invert shift (rad^2/s^2) of :func:`fe.modal.normal_modes`.
     Axial modes (no transverse displacement) are skipped; NaN where the mesh has fewer
-    bending modes than asked.
+    bending modes than asked. With ``floor``: ``(omega, bound)``, ``bound`` the round-off
+    bound of each frequency (:func:`cases.case_convergence.roundoff_floor`).
     """
     K, M, free, dm = cantilever_model(section, length, n_elements)
     k = min(free.size, n_modes + 2)  # the first axial mode (3.6 kHz) is above bending mode 6
@@ -81,10 +85,15 @@ def cantilever_bending_frequencies(section: Section, length: float, n_elements: 
     is_axial[0::3] = True
     axial = is_axial[free]
     bending = np.linalg.norm(shapes[~axial], axis=0) > np.linalg.norm(shapes[axial], axis=0)
-    out = np.full(n_modes, np.nan)
+    out, bound = np.full(n_modes, np.nan), np.full(n_modes, np.nan)
     wb = omega[bending][:n_modes]
     out[: wb.size] = wb
-    return out
+    if not floor:
+        return out
+    from cases.case_convergence import roundoff_floor
+
+    bound[: wb.size] = roundoff_floor(K, wb, shapes[:, bending][:, :n_modes])
+    return out, bound
 
 
 def observed_rate(h: np.ndarray, err: np.ndarray, usable: np.ndarray, n_fit: int = 3) -> float:
@@ -105,29 +114,35 @@ def cantilever_study(elements=CANTILEVER_ELEMENTS, n_modes: int = 6,
                      section: Section = STRIP, length: float = STRIP_LENGTH) -> dict:
     """Relative frequency error of the FE cantilever vs the analytic one.
 
-    The round-off level of each computed frequency is estimated as the largest relative
-    change when the eigen-solution is repeated with two other shifts
-    (``0.5 omega_1^2`` and ``-1e4`` rad^2/s^2, i.e. differently conditioned
-    factorizations); an error is *truncation* when it exceeds ``ROUNDOFF_MARGIN`` times
-    that level, else *round-off*. Rates are fitted over the three finest truncation
-    meshes.
+    The round-off of each computed frequency is sampled as the largest relative change
+    when the eigen-solution is repeated with two other shifts (``0.5 omega_1^2`` and
+    ``-1e4`` rad^2/s^2, i.e. differently conditioned factorizations:
+    ``roundoff_estimate``) and bounded by :func:`cases.case_convergence.roundoff_floor`
+    (``roundoff_floor``); an error is *truncation* when it exceeds ``ROUNDOFF_MARGIN``
+    times the bound, else *round-off* (decided on the bound, so the same on every
+    machine). Rates are fitted over the three finest truncation meshes.
 
     Returns a dict with ``elements``, ``element_size_m``, ``beta_L``, ``analytic_hz``,
     ``relative_error`` (one list of per-mode errors per mesh, NaN where unresolved),
-    ``roundoff_estimate`` (same shape), ``rate`` (observed rate per mode),
+    ``roundoff_estimate`` and ``roundoff_floor`` (same shape), ``truncation`` (bool, same
+    shape), ``rate`` (observed rate per mode),
     ``finest_error`` and ``finest_limited_by`` ('truncation' or 'round-off' per mode),
     ``best_error`` and ``best_elements`` (smallest error per mode and its mesh).
     """
     elements = [int(n) for n in elements]
     exact = cantilever_frequencies_analytic(section, length, n_modes)
     sigmas = (-1.0, 0.5 * exact[0] ** 2, -1.0e4)
-    err, roundoff = [], []
+    err, roundoff, bound = [], [], []
     for n in elements:
-        runs = [cantilever_bending_frequencies(section, length, n, n_modes, s) for s in sigmas]
+        first, b = cantilever_bending_frequencies(section, length, n, n_modes, sigmas[0],
+                                                  floor=True)
+        runs = [first] + [cantilever_bending_frequencies(section, length, n, n_modes, s)
+                          for s in sigmas[1:]]
         err.append(np.abs(runs[0] / exact - 1.0))
         roundoff.append(np.max([np.abs(r / runs[0] - 1.0) for r in runs[1:]], axis=0))
-    err, roundoff = np.array(err), np.array(roundoff)
-    truncation = err > ROUNDOFF_MARGIN * roundoff
+        bound.append(b)
+    err, roundoff, bound = np.array(err), np.array(roundoff), np.array(bound)
+    truncation = err > ROUNDOFF_MARGIN * bound
     h = length / np.array(elements, float)
     rate = np.array([observed_rate(h, err[:, j], truncation[:, j]) for j in range(n_modes)])
     return {
@@ -137,6 +152,8 @@ def cantilever_study(elements=CANTILEVER_ELEMENTS, n_modes: int = 6,
         "analytic_hz": exact / (2 * np.pi),
         "relative_error": err,
         "roundoff_estimate": roundoff,
+        "roundoff_floor": bound,
+        "truncation": truncation,
         "rate": rate,
         "finest_error": err[-1],
         "finest_limited_by": ["truncation" if t else "round-off" for t in truncation[-1]],

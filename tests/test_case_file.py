@@ -170,6 +170,31 @@ def test_convergence_against_the_finest_mesh_is_reached_at_the_coarsest():
     assert r["element_size_m"] == [0.005, 0.0025, 0.00125, 0.000625]
 
 
+def test_convergence_table_decides_round_off_on_a_bound_not_on_a_sample():
+    """The lap's round-off is judged against the componentwise bound eps |phi|^T|K||phi|
+    / (2 lambda), the same on every machine; the two-shift estimate (a sample of the
+    round-off, which moved a change across the old 10x line between BLAS kernels) stays
+    below 0.3 of it. A change within 3 bounds reads round-off and its rate '-'."""
+    from cases.case_convergence import (FLOOR_MARGIN, case_convergence,
+                                        format_case_convergence, roundoff_floor)
+
+    K = np.array([[2.0, -1.0], [-1.0, 2.0]])
+    phi = np.array([[1.0], [1.0]]) / np.sqrt(2.0)           # lambda = 1 with M = I
+    assert roundoff_floor(K, [1.0], phi)[0] == pytest.approx(np.finfo(float).eps * 3.0 / 2)
+    r = case_convergence(resolve_case("docs/case-files/bolted-lap-cantilever.toml"), levels=4)
+    floor, sample = np.array(r["roundoff_floor"]), np.array(r["roundoff_estimate"])
+    assert np.all(sample < 0.3 * floor)
+    change = np.array(r["relative_change_vs_finest"])[:-1]
+    table = format_case_convergence(r).splitlines()
+    rows = [ln.split() for ln in table[3::2][:3]]          # the change rows, coarsest first
+    for k, row in enumerate(rows):
+        for j, word in enumerate(row):
+            resolved = change[k, j] > FLOOR_MARGIN * (floor[k, j] + floor[-1, j])
+            assert (word != "round-off") == resolved
+    rate = table[2 * len(r["element_size_m"]) + 2].split()[1:]
+    assert rate[0] == "-" and len(rate) == 6
+
+
 def test_case_check_and_modes_on_the_command_line(capsys):
     import json
 

@@ -3,7 +3,9 @@
 
 Runs every example not marked ``slow`` (``gl`` ones only where off-screen rendering
 works) in a scratch folder and compares with the pages, ignoring only timings and the
-scratch folder's path. On drift: ``python docs/examples.py`` rewrites the pages.
+scratch folder's path: words and layout exactly, each number within its stated tolerance
+(docs/examples.py ``compare``, ``TOLERANCES``), the same on every machine. On drift:
+``python docs/examples.py`` rewrites the pages.
 """
 from __future__ import annotations
 
@@ -81,16 +83,78 @@ def test_normalization_ignores_only_timings():
     assert examples.normalized(a) != examples.normalized(c)
 
 
-def test_another_cpu_class_compares_words_and_layout_not_digits():
-    """On a CPU of another vector class than the pages' (docs/examples.py), the digits
-    may move by round-off; the words, the verdicts and the number of lines may not."""
+def test_numbers_compare_within_their_tolerance_words_exactly():
+    """docs/examples.py compares words and layout exactly and each number within its
+    tolerance, the same on every machine: round-off in the last digits passes, a moved
+    result, a changed word, a line more or less fails."""
+    compare = _examples().compare
+    page = ["$ iwanfe update --case lap.toml",
+            "chi                             -0.637  -0.679 .. -0.596       determined",
+            "joint: R~ = 6.819e+07 N/m^(chi+2), phi_max = 0.0003053 m, 363 free DOFs",
+            "  macro-slip   w 0.000  dAIC     -4.9  k  9  p    0.22  gain 0.104  not nameable",
+            "time: 9.1 s (serial)"]
+    same = list(page)
+    same[2] = "joint: R~ = 6.82e+07 N/m^(chi+2), phi_max = 0.0003053 m, 363 free DOFs"
+    same[4] = "time: 5.1 s (serial)"
+    assert compare(page, same) == []             # %g dropped a zero; timings ignored
+    # one unit in the last digit (two roundings of one value) and the default rtol 1e-6
+    assert compare(["x 9.453291"], ["x 9.453282"]) == []
+    assert compare(["x 9.453291"], ["x 9.453271"]) != []
+    assert compare(["x 2.60e-06"], ["x 2.61e-06"]) == []
+    assert compare(["x 2.60e-06"], ["x 2.62e-06"]) != []
+    # a counted integer has no last-digit slack
+    assert compare(["363 free DOFs"], ["364 free DOFs"]) != []
+    # the held-out gain that moved (0.104 -> 0.115) fails, named with both values
+    moved = list(page)
+    moved[3] = moved[3].replace("0.104", "0.115")
+    (problem,) = compare(page, moved)
+    assert "page 0.104, command 0.115" in problem and "tolerance 0.001" in problem
+    assert "line 4, number 5" in problem
+    # changed words: a verdict, "n/a" for a number, a line less
+    assert compare(page, [ln.replace("determined", "not determined") for ln in page])
+    assert compare(["rate  1.59  1.73"], ["rate  n/a  1.73"])
+    assert compare(page, page[:-2] + page[-1:])
+    # spaces collapse (a column widened by a digit is the same layout); numbers still count
+    assert compare(["   1    0.5"], ["   1   10.5"]) != []
+    assert compare(["   1    0.5"], ["   1     0.5"]) == []
+
+
+def test_the_stated_per_quantity_tolerances_apply():
+    """A rigid-body mode's zero eigenvalue gets an absolute floor (any sign, 1e-13 ..
+    1e-9), its elastic neighbours do not; a block's ``rtol=`` raises every number's."""
     examples = _examples()
-    page = ["chi   -0.637463  -0.679425 .. -0.595501   determined / fitted from -0.5574",
-            "    1       0.00  rigid-body                 -   7.21e-14"]
-    other = ["chi   -0.637464  -0.679426 .. -0.595502   determined / fitted from -0.5574",
-             "    1       0.00  rigid-body                 -  -2.08e-13"]
-    assert examples.normalized(page) != examples.normalized(other)
-    assert examples.masked(page) == examples.masked(other)
-    renamed = [page[0].replace("determined", "open"), page[1]]
-    assert examples.masked(page) != examples.masked(renamed)
-    assert examples.masked(page) != examples.masked(page[:1])
+    compare = examples.compare
+    page = ["    1       0.00  rigid-body                 -  -2.08e-13",
+            "    3       0.01  rigid-body                 -  -1.51e-09",
+            "    4     166.85  bending                    1   3.81e-02"]
+    other = ["    1       0.00  rigid-body                 -   7.21e-14",
+             "    3       0.00  rigid-body                 -  -6.63e-10",
+             "    4     166.85  bending                    1   3.81e-02"]
+    assert compare(page, other) == []
+    elastic = other[:2] + ["    4     166.85  bending                    1   3.83e-02"]
+    (problem,) = compare(page, elastic)
+    assert "(default)" in problem and "page 3.81e-02, command 3.83e-02" in problem
+    # the rigid-body floors are absolute and stated: a real glue slip is not within them
+    assert compare(page[:1], ["    1       0.00  rigid-body                 -   2.00e-05"])
+    names = {t.quantity: t for t in examples.TOLERANCES}
+    assert names["rigid-body glue slip"].atol == 1e-6
+    # every stated tolerance has its reason beside it (a comment) and matches a line
+    source = (ROOT / "docs" / "examples.py").read_text(encoding="utf-8")
+    table = source[source.index("TOLERANCES = ("):source.index("\n)\n", source.index(
+        "TOLERANCES = ("))]
+    assert table.count("Tolerance(") == len(examples.TOLERANCES) >= 4
+    assert table.count("#") >= len(examples.TOLERANCES) // 2
+    # a block's option raises every number's tolerance
+    assert compare(["gain 0.104"], ["gain 0.110"]) != []
+    assert compare(["gain 0.104"], ["gain 0.110"], {"rtol": "0.1"}) == []
+    assert compare(["gain 0.104"], ["gain 0.110"], {"atol": "0.01"}) == []
+    assert examples.parse_options("rtol=1e-3 slow") == {"rtol": "1e-3", "slow": True}
+
+
+def test_near_zero_numbers_need_their_absolute_floor():
+    """Without a stated floor a number near zero compares relatively: a sign flip of a
+    round-off value fails unless its quantity is in the table."""
+    compare = _examples().compare
+    assert compare(["residual -2.08e-13"], ["residual 7.21e-14"]) != []
+    assert compare(["residual -2.08e-13"], ["residual 7.21e-14"], {"atol": "1e-12"}) == []
+    assert compare(["shift +0.00"], ["shift -0.00"]) == []

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cases.fe_loop.digits import fmt_interval
 from inverse.diagnosis.report import own_scatter_sentence
 
 __all__ = ["add_fe_diagnosis", "format_fe", "write_fe_files"]
@@ -87,7 +88,9 @@ def format_fe(fe: dict) -> list:
     for n, p in fe["parameters"].items():
         iv = p["interval"]
         ab = f", at its {p['at_bound']} bound" if p["at_bound"] else ""
-        lines.append(f"    {n:10s} {p['value']:.6g} [{_g(iv[0], '.6g')} .. {_g(iv[1], '.6g')}] "
+        value, lo, hi = fmt_interval(p["value"], *iv)     # the digits the interval supports
+        lines.append(f"    {n:10s} {value} [{'n/a' if iv[0] is None else lo} .. "
+                     f"{'n/a' if iv[1] is None else hi}] "
                      f"({p['interval_kind']}{ab})")
     if fe["reading"]:
         lines.append("  extended FE parameters: " + ", ".join(

@@ -11,9 +11,11 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from statistics import NormalDist
 
 import numpy as np
 
+from cases.fe_loop.digits import fmt, fmt_interval
 from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
 from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
@@ -186,10 +188,13 @@ def format_text(s: dict) -> str:
              f"          status / kind"]
     for name, p in s["parameters"].items():
         iv = p.get("interval")
-        ivs = f"{_fmt(iv[0])} .. {_fmt(iv[1])}" if iv else ""
+        # to the digits the interval supports (cases.fe_loop.digits); JSON keeps them all
+        value, lo, hi = fmt_interval(p["value"], *(iv or (None, None)), fallback=".7g",
+                                     z=NormalDist().inv_cdf(0.5 + s["confidence"] / 2))
+        ivs = f"{lo} .. {hi}" if iv else ""
         ab = f" / at {p['at_bound']} bound" if p.get("at_bound") else ""
         start = f" from {p['start']:.4g}" if "start" in p else ""
-        lines.append(f"{_LABEL.get(name, name):26s} {p['value']:14.7g}  {ivs:28s} "
+        lines.append(f"{_LABEL.get(name, name):26s} {value:>14s}  {ivs:28s} "
                      f"{p.get('status', '')} / {p['kind']}{start}{ab}")
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
@@ -225,12 +230,18 @@ def format_text(s: dict) -> str:
     if s["assumptions"]:
         lines.append("assumed properties changed (refitted): dchi2, top held-out level shift "
                      "[Hz], [% zeta], top slip/phi_max")
+        # the shifts to one digit of the top level's noise sd: a shift is read against it,
+        # and below a tenth of it it is the refits' convergence (1e-6 Hz, 1e-3 % that move
+        # with the BLAS kernel), not the assumption's effect
+        top = s["levels"][-1]["measured"]
+        sd_f = n["sigma_omega2"][-1] / (2 * (2 * math.pi) ** 2 * top["frequency_hz"])
+        sd_z = 100 * n["sigma_zeta"][-1] / top["zeta"]
         for a in s["assumptions"]:
             zeta_shift = (None if a['shift_top_zeta_rel'] is None
                           else 100 * a['shift_top_zeta_rel'])
             lines.append(f"  {a['assumption']:28s} {a['delta_chi2']:+9.2f} "
-                         f"{_fmt(a['shift_top_frequency_hz'], 3):>10s} "
-                         f"{_fmt(zeta_shift, 3):>8s}"
+                         f"{fmt(a['shift_top_frequency_hz'], sd_f, '.3g', 1):>10s} "
+                         f"{fmt(zeta_shift, sd_z, '.3g', 1):>8s}"
                          f" {a['top_slip_over_phi_max']:9.3g}")
     t = s["timing_s"]
     lines.append(f"time: {t['total']:.1f} s ({s['executor']})")

@@ -46,10 +46,14 @@ def format_table(report: dict) -> str:
     lines = ["Cantilever strip (350 x 50 x 1 mm, E 70 GPa): relative frequency error vs analytic",
              "beta_n L = " + ", ".join(f"{b:.6f}" for b in c["beta_L"]),
              f"{'elements':>8} " + " ".join(f"{'mode ' + str(j + 1):>10}" for j in range(n_modes))]
-    for n, row in zip(c["elements"], err):
-        lines.append(f"{n:>8} " + " ".join(f"{v:10.2e}" if np.isfinite(v) else f"{'-':>10}"
-                                           for v in row))
-    lines.append(f"{'rate':>8} " + " ".join(f"{r:10.3f}" for r in c["rate"]))
+    # an error within ROUNDOFF_MARGIN x its round-off bound reads round-off (its digits
+    # are the BLAS kernel's), the rate over the truncation errors to two decimals
+    resolved = np.asarray(c.get("truncation", np.isfinite(err)), bool)
+    for n, row, ok in zip(c["elements"], err, resolved):
+        lines.append(f"{n:>8} " + " ".join(
+            f"{v:10.2e}" if np.isfinite(v) and good else
+            f"{'round-off' if np.isfinite(v) else '-':>10}" for v, good in zip(row, ok)))
+    lines.append(f"{'rate':>8} " + " ".join(f"{r:10.2f}" for r in c["rate"]))
     lines.append(f"{'best':>8} " + " ".join(f"{v:10.2e}" for v in c["best_error"]))
     lines.append(f"{'at n':>8} " + " ".join(f"{v:>10}" for v in c["best_elements"]))
     lines.append("finest mesh limited by: " + ", ".join(c["finest_limited_by"]))
