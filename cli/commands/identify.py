@@ -61,7 +61,8 @@ def register(subparsers) -> None:
                         help="weights of the maximum-likelihood refinement (default auto: a "
                              "noise model fitted to the residuals)")
     parser.add_argument("--no-pseudo-modes", dest="pseudo_modes", action="store_false",
-                        help="no pseudo-modes below/above the band in the refinement")
+                        help="no fixed out-of-band poles (F-tested linear terms below/above "
+                             "the band) in the refinement")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--plot", metavar="FILE.png", default=None,
                         help="stabilization diagram (several FILEs: FILE-<level>.png)")
