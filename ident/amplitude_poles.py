@@ -53,7 +53,7 @@ from scipy.optimize import least_squares
 from ident.lsfd import lsfd
 from ident.pole_uncertainty import gauss_newton_covariance, modal_std
 from ident.poles import QUANTITY_POWER, modal_receptance, to_receptance
-from ident.refine import DECREMENT_TOL, noise_weights, polish, refine_poles
+from ident.refine import DECREMENT_TOL, PRECISION, noise_weights, polish, refine_poles
 
 __all__ = ["mode_amplitudes", "amplitude_poles", "AMPLITUDE_PASSES", "SLOPE_F_LEVEL",
            "BETA_STARTS"]
@@ -190,7 +190,8 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
         sol = min((least_squares(misfit, t0, method="lm", x_scale="jac",
                                  max_nfev=200 * (n_theta + 1)) for t0 in _starts(theta, m)),
                   key=lambda r: r.cost if np.isfinite(r.cost) else np.inf)
-        x, dec, chi1, _ = polish(misfit, sol.x, n_lin)
+        floor = PRECISION ** 2 * float(np.mean(np.abs(wt * Hn) ** 2)) / 2
+        x, dec, chi1, _ = polish(misfit, sol.x, n_lin, floor)
         lines, peak_poles = _line_poles(x, m, sigma0, wd0, u)
         if not (dec < DECREMENT_TOL and np.isfinite(chi1) and np.all(peak_poles.real < 0)):
             return modes, (f"the amplitude-dependent refit did not converge (Newton "

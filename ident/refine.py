@@ -33,8 +33,9 @@ polish the optimum until the Newton decrement ``g^T (J^T J)^-1 g`` (``J`` the ce
 difference Jacobian of the projected residual, ``g = J^T r``), in units of the residual
 variance ``s^2 = |r|^2 / dof``, is below :data:`DECREMENT_TOL`: the distance to the
 optimum in standard deviations of the parameters is its square root (1e-3 here), so
-round-off in the start moves the result by far less than its uncertainty. A fit that
-does not get there says so (``Refinement.converged``).
+round-off in the start moves the result by far less than its uncertainty. On noise-free
+data ``s^2`` is at least (:data:`PRECISION` x the data's rms)^2. A fit that does not get
+there says so (``Refinement.converged``).
 """
 from __future__ import annotations
 
@@ -62,6 +63,9 @@ OUT_OF_BAND_F_QUANTILE = 0.999
 #: Newton decrement (in units of the residual variance) below which a fit is converged:
 #: the optimum lies within sqrt(DECREMENT_TOL) = 1e-3 standard deviations.
 DECREMENT_TOL = 1e-6
+#: Relative precision of the data below which a misfit is round-off: the residual
+#: variance of a fit is taken as at least (PRECISION x the data's rms)^2.
+PRECISION = 1e-10
 #: Gauss-Newton polishing steps at most after Levenberg-Marquardt.
 POLISH_STEPS = 30
 
@@ -135,9 +139,10 @@ def _projected_residual(freq_hz, frf, weights, fixed, sigma0, wd0):
     return residual, poles
 
 
-def _decrement(residual, theta, n_linear):
+def _decrement(residual, theta, n_linear, s2_floor=0.0):
     """(Newton decrement / s^2, Gauss-Newton step, chi2) at ``theta``: central-
-    difference Jacobian (step 1e-5 of a half-power half-width)."""
+    difference Jacobian (step 1e-5 of a half-power half-width); ``s^2`` at least
+    ``s2_floor`` (a fit to noise-free data has no residual variance to measure by)."""
     r0 = residual(theta)
     h = 1e-5
     J = np.empty((r0.size, theta.size))
@@ -149,16 +154,18 @@ def _decrement(residual, theta, n_linear):
     dof = r0.size - theta.size - n_linear
     g = J.T @ r0
     step = -np.linalg.lstsq(J, r0, rcond=1e-12)[0]
-    s2 = chi2 / dof if dof > 0 else chi2
+    s2 = max(chi2 / dof if dof > 0 else chi2, s2_floor)
     dec = float(-g @ step) / s2 if s2 > 0 else 0.0
     return dec, step, chi2
 
 
-def polish(residual, theta, n_linear: int):
+def polish(residual, theta, n_linear: int, s2_floor: float = 0.0):
     """Gauss-Newton steps with step halving from ``theta`` until the Newton decrement
     is below :data:`DECREMENT_TOL` (or :data:`POLISH_STEPS` are spent, or no step
-    descends). Returns (theta, decrement, chi2, residual evaluations)."""
-    dec, step, chi2 = _decrement(residual, theta, n_linear)
+    descends); ``s2_floor``: the least residual variance per real residual (the data's
+    mean square times :data:`PRECISION` squared: noise-free data). Returns (theta,
+    decrement, chi2, residual evaluations)."""
+    dec, step, chi2 = _decrement(residual, theta, n_linear, s2_floor)
     n_eval = 1 + 2 * theta.size
     for _ in range(POLISH_STEPS):
         if dec < DECREMENT_TOL:
@@ -174,7 +181,7 @@ def polish(residual, theta, n_linear: int):
         else:
             break                      # no descent along the Gauss-Newton step
         theta = trial
-        dec, step, chi2 = _decrement(residual, theta, n_linear)
+        dec, step, chi2 = _decrement(residual, theta, n_linear, s2_floor)
         n_eval += 1 + 2 * theta.size
     return theta, dec, chi2, n_eval
 
@@ -199,7 +206,9 @@ def refine_poles(freq_hz, frf, poles, weights=None, fixed=()) -> Refinement:
                                            -poles.real, poles.imag)
     sol = least_squares(residual, np.zeros(2 * m), method="lm", x_scale=1.0,
                         ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=200 * (2 * m + 1))
-    theta, dec, chi2, n_eval = polish(residual, sol.x, n_linear)
+    w = 1.0 if weights is None else np.asarray(weights)
+    floor = PRECISION ** 2 * float(np.mean(np.abs(w * np.asarray(frf)) ** 2)) / 2
+    theta, dec, chi2, n_eval = polish(residual, sol.x, n_linear, floor)
     return Refinement(unpack(theta), chi2, dec, bool(dec < DECREMENT_TOL),
                       n_eval + int(sol.nfev))
 
