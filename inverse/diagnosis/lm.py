@@ -37,17 +37,20 @@ one on a bound, in the decrement and in the next step; the others must still con
 Without this a problem crawls towards the kink at ever larger damping and never meets
 the decrement test.
 
-Steps: five trial steps per iteration, dampings ``mu (1e-3, 1e-2, 0.1, 1, 10)`` times the
-diagonal of ``J^T J`` (Marquardt 1963; in box units floored at :data:`DAMPING_FLOOR`
-of its largest entry: Marquardt's scaling makes the step of a coordinate with an
-almost vanishing column as large as any other's in its own units, which for a bounded
-parameter means many box widths, clipped, at every damping), on the free coordinates, clipped to the box (a
-projected step: descent when small enough), evaluated in one batch; the best is taken
-when it lowers ``chi2``. ``mu`` (initially 1) adapts per problem: times ``10^(i - 2)``
-after a step whose best damping was the ``i``-th (at least 1), back to 1 when a new
-kink is held, times 1e4 after an iteration with no lower trial (the Jacobian is then
-reused, but a forward one is first replaced by a second-order one: its error may be
-what failed), stalled beyond :data:`MU_MAX`.
+Steps: seven trial steps per iteration, evaluated in one batch: dampings ``mu (1e-3,
+1e-2, 0.1, 1, 10)`` times the diagonal of ``J^T J`` (Marquardt 1963; in box units
+floored at :data:`DAMPING_FLOOR` of its largest entry: Marquardt's scaling makes the
+step of a coordinate with an almost vanishing column as large as any other's in its own
+units, which for a bounded parameter means many box widths, clipped, at every damping),
+and the step of damping ``mu`` 3 and 9 times longer (in a long curved valley, where the
+Gauss-Newton model is trusted only at high damping, the damped steps point along the
+valley but crawl); on the free coordinates, clipped to the box (a projected step:
+descent when small enough); the best is taken when it lowers ``chi2``. ``mu``
+(initially 1) adapts per problem: times ``10^(i - 2)`` after a step whose best damping
+was the ``i``-th (a longer step counts as the second; ``mu`` at least 1), back to 1 when
+a new kink is held, times 1e4 after an iteration with no lower trial (the Jacobian is
+then reused, but a forward one is first replaced by a second-order one: its error may
+be what failed), stalled beyond :data:`MU_MAX`.
 """
 from __future__ import annotations
 
@@ -64,6 +67,9 @@ __all__ = ["DECREMENT_TOL", "MU_MAX", "DAMPING_FLOOR", "KINK_JUMP", "Refined", "
 #: Damping multiplier beyond which a problem whose trials no longer lower chi2 stalls.
 MU_MAX = 1e12
 _LAMBDAS = np.array([1e-3, 1e-2, 1e-1, 1.0, 10.0])
+#: The step of damping ``mu`` (``_LAMBDAS[_STRETCHED]`` = 1 times it) is also tried
+#: this many times longer (module doc).
+_STRETCHED, _STRETCH = 3, np.array([3.0, 9.0])
 #: Least damping diagonal of a coordinate, in box units, relative to the largest.
 DAMPING_FLOOR = 1e-6
 #: A coordinate whose one-sided Jacobians differ by more than this fraction of their
@@ -111,36 +117,65 @@ def decrement(J, r, theta, lo, hi, fixed=None) -> np.ndarray:
         np.asarray(hi, float) - np.asarray(lo, float))
 
 
-def _forward(residuals, theta, rows, r0, h, hi):
-    """Forward-difference Jacobian (b, d, N) and its steps (b, d), into the box."""
-    b, d = theta.shape
+def _points(theta, h, lo, hi):
+    """Difference steps (b, d) into the box, whether the opposite point is in the box
+    (b, d), and the points (b, d, d) of the forward and of the second evaluation
+    (opposite, else twice the step)."""
+    d = theta.shape[1]
     step = np.where(theta + h > hi, -h, h)
-    pts = (theta[:, None, :] + step[:, :, None] * np.eye(d)).reshape(-1, d)
-    rj = residuals(pts, np.repeat(rows, d, axis=0)).reshape(b, d, -1)
-    return (rj - r0[:, None, :]) / step[:, :, None], step
-
-
-def _second_order(residuals, theta, rows, r0, J, step, lo, hi):
-    """Second-order Jacobian from the forward one (``J``, ``step``): central where the
-    opposite point is in the box, else the one-sided three-point rule; and the
-    coordinates at a kink (module doc), (b, d) bool."""
-    b, d = theta.shape
     opposite = theta - step
     inside = (opposite >= lo) & (opposite <= hi)
     other = np.where(inside, opposite, theta + 2.0 * step)
-    eye = np.eye(d, dtype=bool)
-    pts = np.where(eye[None], other[:, None, :], theta[:, None, :]).reshape(-1, d)
-    ro = residuals(pts, np.repeat(rows, d, axis=0)).reshape(b, d, -1)
-    r1 = r0[:, None, :] + J * step[:, :, None]                # r(theta + step)
-    central = (r1 - ro) / (2.0 * step[:, :, None])
-    three = (-3.0 * r0[:, None, :] + 4.0 * r1 - ro) / (2.0 * step[:, :, None])
+    eye = np.eye(d, dtype=bool)[None]
+    forward = theta[:, None, :] + step[:, :, None] * eye
+    return step, inside, forward, np.where(eye, other[:, None, :], theta[:, None, :])
+
+
+def _second_order(r0, r1, ro, step, inside):
+    """Second-order Jacobian (b, d, N) from the residuals at the forward points ``r1``
+    and the second ones ``ro`` (b, d, N): central where the opposite point is in the
+    box, else the one-sided three-point rule; and the coordinates at a kink (module
+    doc), (b, d) bool."""
+    s = step[:, :, None]
+    central = (r1 - ro) / (2.0 * s)
+    three = (-3.0 * r0[:, None, :] + 4.0 * r1 - ro) / (2.0 * s)
     J2 = np.where(inside[:, :, None], central, three)
     f0 = np.sum(r0**2, axis=1)[:, None]
     f1, fo = np.sum(r1**2, axis=2), np.sum(ro**2, axis=2)
-    jump = np.linalg.norm(J - (r0[:, None, :] - ro) / step[:, :, None], axis=2)
-    size = np.maximum(np.linalg.norm(J, axis=2), np.linalg.norm(J2, axis=2))
+    Jf, Jb = (r1 - r0[:, None, :]) / s, (r0[:, None, :] - ro) / s
+    jump = np.linalg.norm(Jf - Jb, axis=2)
+    size = np.maximum(np.linalg.norm(Jf, axis=2), np.linalg.norm(J2, axis=2))
     kink = inside & (f1 > f0) & (fo > f0) & (jump > KINK_JUMP * size)
     return J2, kink
+
+
+def _jacobians(residuals, theta, rows, r0, h, lo, hi, exact, fixed, tol):
+    """Jacobians (b, d, N), the coordinates held (fixed, at a kink) and the decrements
+    of a batch: forward differences, second-order ones for the problems ``exact`` and
+    for those whose forward decrement is under ``tol`` (module doc). The forward
+    points and the second points of the ``exact`` problems are one evaluation."""
+    b, d = theta.shape
+    step, inside, fwd, other = _points(theta, h, lo, hi)
+    ex = np.flatnonzero(exact)
+    pts = np.concatenate([fwd.reshape(-1, d), other[ex].reshape(-1, d)])
+    m = np.concatenate([np.repeat(rows, d, axis=0), np.repeat(rows[ex], d, axis=0)])
+    rr = residuals(pts, m)
+    r1 = rr[:b * d].reshape(b, d, -1)
+    J = (r1 - r0[:, None, :]) / step[:, :, None]
+    hold = np.broadcast_to(fixed, (b, d)).copy()
+    dec = decrement(J, r0, theta, lo, hi, hold)
+    near = np.flatnonzero((dec <= tol) & ~exact)
+    ro = np.empty((b, d, r0.shape[1]))
+    ro[ex] = rr[b * d:].reshape(ex.size, d, r0.shape[1])
+    if near.size:
+        ro[near] = residuals(other[near].reshape(-1, d), np.repeat(rows[near], d, axis=0)
+                             ).reshape(near.size, d, r0.shape[1])
+    two = np.union1d(ex, near)
+    if two.size:
+        J[two], kink = _second_order(r0[two], r1[two], ro[two], step[two], inside[two])
+        hold[two] |= kink
+        dec[two] = decrement(J[two], r0[two], theta[two], lo, hi, hold[two])
+    return J, hold, dec
 
 
 def levenberg_marquardt(residuals: Callable, theta, rows, lo, hi, iters: int,
@@ -180,21 +215,14 @@ def levenberg_marquardt(residuals: Callable, theta, rows, lo, hi, iters: int,
     for k in range(iters + 1):
         idx = np.flatnonzero(live & stale)
         if idx.size:
-            Jn, step = _forward(residuals, theta[idx], rows[idx], r0[idx], h, hi)
-            was = hold[idx].copy()
-            hold[idx] = fixed
-            dn = decrement(Jn, r0[idx], theta[idx], lo, hi, hold[idx])
-            near = np.flatnonzero((dn <= tol) | exact[idx])
-            if near.size:
-                i = idx[near]
-                Jn[near], kink = _second_order(residuals, theta[i], rows[i], r0[i],
-                                               Jn[near], step[near], lo, hi)
-                mu[i[np.any(kink & ~was[near], axis=1)]] = 1.0   # a new kink held
-                hold[i] |= kink
-                dn[near] = decrement(Jn[near], r0[i], theta[i], lo, hi, hold[i])
-            J[idx], dec[idx], stale[idx] = Jn, dn, False
-            conv[idx[dn <= tol]] = True
-            live[idx[dn <= tol]] = False
+            was = hold[idx]
+            J[idx], hold[idx], dec[idx] = _jacobians(residuals, theta[idx], rows[idx],
+                                                     r0[idx], h, lo, hi, exact[idx],
+                                                     fixed, tol)
+            mu[idx[np.any(hold[idx] & ~was, axis=1)]] = 1.0      # a new kink held
+            stale[idx] = False
+            conv[idx[dec[idx] <= tol]] = True
+            live[idx[dec[idx] <= tol]] = False
         idx = np.flatnonzero(live)
         if k == iters or idx.size == 0:
             break
@@ -232,16 +260,20 @@ def _step(residuals, theta, rows, r0, f0, J, mu, idx, lo, hi, hold) -> np.ndarra
     with np.errstate(all="ignore"):
         delta = np.linalg.solve(Mt, np.broadcast_to(g[:, None, :, None],
                                                     (idx.size, L, d, 1)))[..., 0]
-    trial = np.clip(th[:, None, :] - np.nan_to_num(delta), lo, hi).reshape(-1, d)
-    rt = residuals(trial, np.repeat(rows[idx], L, axis=0)).reshape(idx.size, L, -1)
+    delta = np.nan_to_num(np.concatenate([delta, _STRETCH[None, :, None]
+                                          * delta[:, _STRETCHED, None, :]], axis=1))
+    T = delta.shape[1]
+    trial = np.clip(th[:, None, :] - delta, lo, hi).reshape(-1, d)
+    rt = residuals(trial, np.repeat(rows[idx], T, axis=0)).reshape(idx.size, T, -1)
     ft = np.sum(rt**2, axis=2)
     ft = np.where(np.isfinite(ft), ft, np.inf)
     best = np.argmin(ft, axis=1)
     fb = ft[np.arange(idx.size), best]
     better = fb < f0[idx]
     upd = idx[better]
-    theta[upd] = trial.reshape(idx.size, L, d)[better, best[better]]
+    theta[upd] = trial.reshape(idx.size, T, d)[better, best[better]]
     r0[upd] = rt[better, best[better]]
     f0[upd] = fb[better]
-    mu[upd] = np.maximum(mu[upd] * 10.0 ** (best[better] - 2), 1.0)
+    rank = np.where(best < L, best, 1)[better]          # a longer step: less damping
+    mu[upd] = np.maximum(mu[upd] * 10.0 ** (rank - 2), 1.0)
     return better, better & (best == L - 1)
