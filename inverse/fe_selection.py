@@ -9,7 +9,9 @@ units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
   and highest fit level always stay in: they anchor the amplitude range). Each fold
   repeats the candidate's whole fit: from every one of its *original* starts, the best
   kept (never from the full optimum, which has seen the left-out level); a fold whose fit or
-  prediction fails is counted, and an error over failed folds is ``None`` (``n/a``);
+  prediction fails, or whose fit did not converge (:attr:`inverse.update.Fit.converged`:
+  its prediction would depend on where the optimizer stopped), is counted as failed, and
+  an error over failed folds is ``None`` (``n/a``);
 * :func:`held_out_errors`: the levels outside the fit, predicted by the fit itself.
 
 :func:`judge_extensions` applies :func:`inverse.judge.select` (fit test, cost per
@@ -45,6 +47,7 @@ class FitCandidate:
     excluded: str | None = None
     cv_error: float | None = None
     cv_failed: int = 0
+    cv_unconverged: int = 0
     cv_done: bool = False
     chi2_by_channel: dict | None = field(default=None, repr=False)
 
@@ -69,9 +72,10 @@ def held_out_errors(problem: UpdateProblem, values: dict) -> float | None:
 def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-8) -> tuple:
     """Leave-one-level-out rms error over the interior fit levels (module docstring),
     each fold refitted from every start of ``starts`` (optimizer tolerance ``tol``), the
-    best kept. Returns ``(error or None, failed folds)``."""
+    best kept. Returns ``(error or None, failed folds, of them those whose fit did not
+    converge)``."""
     idx = np.flatnonzero(problem.fit_mask)
-    r2, failed = [], 0
+    r2, failed, unconverged = [], 0, 0
     for i in idx[1:-1]:
         m = problem.fit_mask.copy()
         m[i] = False
@@ -81,19 +85,21 @@ def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-
         one[i] = True
         before = problem.failures
         r = problem.residuals(f.values, one)
-        if not f.success or problem.failures > before:
+        if not f.converged or problem.failures > before:
             failed += 1
+            unconverged += f.feasible and not f.converged
             continue
         r2.extend((r * r).tolist())
     if failed or not r2:
-        return None, failed
-    return float(np.sqrt(np.mean(r2))), failed
+        return None, failed, unconverged
+    return float(np.sqrt(np.mean(r2))), failed, unconverged
 
 
 def _cv(c: FitCandidate, say) -> None:
     if not c.cv_done and c.fit is not None:
         say(f"cross-validation: {c.name}")
-        c.cv_error, c.cv_failed = cross_validate(c.problem, c.fit, c.starts)
+        c.cv_error, c.cv_failed, c.cv_unconverged = cross_validate(c.problem, c.fit,
+                                                                   c.starts)
         c.cv_done = True
 
 
@@ -138,8 +144,8 @@ def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None)
 
     Returns ``selection`` (the judge's answer), ``candidates`` (name -> FitCandidate)
     and ``evidence`` (per candidate: ``chi2``, ``n_params``, ``weight``, ``fit_test``,
-    ``cv_error``, ``gain``, ``gain_computed``, ``failed_folds``, ``gain_untestable``,
-    ``why_not``)."""
+    ``converged``, ``cv_error``, ``gain``, ``gain_computed``, ``failed_folds`` with
+    ``unconverged_folds`` of them, ``gain_untestable``, ``why_not``)."""
     say = progress or (lambda s: None)
     cands = [base] + list(extensions)
     _cv(base, say)
@@ -172,9 +178,11 @@ def judge_extensions(base: FitCandidate, extensions: list, noise, progress=None)
         ev[c.name] = {"causes": list(c.causes),
                       "chi2": None if c.fit is None else c.fit.chi2,
                       "n_params": None if c.fit is None else c.fit.k,
+                      "converged": None if c.fit is None else c.fit.converged,
                       "weight": sel.weights[c.name], "fit_test": t.to_json(),
                       "cv_error": c.cv_error, "gain": gain,
                       "gain_computed": c.cv_done, "failed_folds": c.cv_failed,
+                      "unconverged_folds": c.cv_unconverged,
                       "gain_untestable": _untestable(c, base),
                       "failed_simulations": 0 if c.fit is None else c.fit.failed_simulations,
                       "why_not": _reason(c, sel)}

@@ -43,13 +43,15 @@ __all__ = ["ProfilePoint", "Profile", "threshold", "profile_branch", "stored_bra
 @dataclass
 class ProfilePoint:
     """One grid point: the parameter ``value``, the profiled ``chi2``, every parameter
-    ``values`` of that optimum (None where the fit failed) and ``problem.describe`` of
-    them (``extra``)."""
+    ``values`` of that optimum (None where the fit failed), ``problem.describe`` of
+    them (``extra``) and whether its fit ``converged`` (:attr:`inverse.update.Fit.
+    converged`; an unconverged point's chi2 may be too high)."""
 
     value: float
     chi2: float
     values: dict | None = None
     extra: dict | None = None
+    converged: bool = True
 
 
 @dataclass
@@ -105,6 +107,11 @@ class Profile:
         return sum(p.values is None for p in self.points)
 
     @property
+    def unconverged_points(self) -> int:
+        """Points whose fit gave a chi2 but did not converge."""
+        return sum(p.values is not None and not p.converged for p in self.points)
+
+    @property
     def status(self) -> str:
         if self.failed_sides:
             return "failed (" + ", ".join(self.failed_sides) + " side)"
@@ -126,6 +133,7 @@ class Profile:
         lo, hi = self.interval
         return {"best": self.best, "interval": [lo, hi], "status": self.status,
                 "threshold": self.threshold, "failed_points": self.failed_points,
+                "unconverged_points": self.unconverged_points,
                 "grid": [{"value": p.value, "delta_chi2": p.chi2 - self.chi2_min}
                          for p in self.points]}
 
@@ -191,7 +199,7 @@ def profile_branch(task, problem: UpdateProblem) -> list:
         extra = problem.figures(f.values)
         if extra is None and problem.describe is not None:   # its figures failed: counted
             return ProfilePoint(v, f.chi2)
-        return ProfilePoint(v, f.chi2, dict(f.values), extra)
+        return ProfilePoint(v, f.chi2, dict(f.values), extra, f.converged)
 
     i, extended = 0, 0
     while i < len(grid):

@@ -85,7 +85,8 @@ def test_repeats_give_the_noise_and_identification_only_changes_the_verdict():
     assert 0.3e-3 < n["total_rel"] < 3e-3
     assert r["verdict_identification_only"] is not None
     assert r["verdict_identification_only"]["cause"] != "none"
-    assert r["verdict_identification_only"]["failures"] == {"fits": 0}   # counted
+    assert r["verdict_identification_only"]["failures"] == {"fits": 0,   # counted
+                                                            "unconverged_fits": 0}
     assert r["verdict_changes_with_identification_only"] is True
     assert "identification's noise alone" in r["summary"]
 
@@ -220,7 +221,8 @@ def test_a_damping_drift_in_run_order_is_not_taken_for_the_rig_scatter():
                       zeta_std=d.zeta_std * drifted / d.zeta))
         assert r["noise"]["zeta"]["assumed_repeatability"]["capped"], r["noise"]["zeta"]
         assert r["verdict_own_scatter"] is not None
-        assert set(r["verdict_own_scatter"]["failures"]) == {"fits", "folds"}
+        assert set(r["verdict_own_scatter"]["failures"]) == {"fits", "folds",
+                                                             "unconverged_fits"}
         assert "with that scatter as the noise" in r["summary"]
         verdicts.append(r["cause"])
     assert verdicts.count("none") <= 1, verdicts

@@ -63,8 +63,17 @@ def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
     r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
                      levels=DoubleBeamLevels.from_data)["fe"]
     assert r["cause"] == "none" and r["fit_test"]["p_value"] > 1e-3
-    assert r["failures"] == {"simulations": 0, "folds": 0, "fits": 0, "profile_points": 0,
-                             "fallbacks": {"base": [], "extended": []}}
+    fl = r["failures"]
+    assert {k: fl[k] for k in ("simulations", "folds", "fits", "profile_points",
+                               "fallbacks")} == {
+        "simulations": 0, "folds": 0, "fits": 0, "profile_points": 0,
+        "fallbacks": {"base": [], "extended": []}}
+    # every fit says whether it converged, and the failures name those that did not
+    stopped = [k for k, e in r["evidence"].items() if e["converged"] is False]
+    assert fl["unconverged_fit_names"] == stopped and fl["unconverged_fits"] == len(stopped)
+    assert "none" not in stopped and r["base_fit"]["converged"]
+    assert fl["unconverged_folds"] == sum(e["unconverged_folds"]
+                                          for e in r["evidence"].values())
     assert r["verdict_own_scatter"] is None          # nothing capped: no second verdict
     assert r["estimator_start"] == "used"
 
@@ -94,7 +103,8 @@ def test_a_damping_cycle_in_run_order_gets_a_second_verdict_at_the_fe_level():
     assert r["cause"] != "none", r["closest_miss"]
     own = r["verdict_own_scatter"]
     assert own["cause"] == "none" and own["fit_test"]["p_value"] >= 1e-3, own
-    assert own["failures"] == {"fits": 0, "folds": 0}
+    assert set(own["failures"]) == {"fits", "folds", "unconverged_fits"}
+    assert own["failures"]["fits"] == own["failures"]["folds"] == 0
     assert any("with that scatter as the noise the verdict would be none" in ln
                for ln in format_fe(r))
     # the damping's scatter threw the paper's estimator off (its stuck frequency far
@@ -137,6 +147,13 @@ def test_diagnose_case_double_beam_holds_fe_levels(capsys, tmp_path):
     err = rows[9]["extended"]["frequency_hz"] - meas["frequency_hz"]
     assert fe["held_out"][-1]["extended_error_hz"] == pytest.approx(err)
     assert (tmp_path / "fe_levels.png").stat().st_size > 1000
+    # on the shipped data every fit of both levels converged, and the JSON says so
+    assert r["failures"]["total"] == 0 and r["failures"]["unconverged_fits"] == 0
+    fl = fe["failures"]
+    assert (fl["unconverged_fits"], fl["unconverged_fit_names"], fl["unconverged_folds"],
+            fl["unconverged_profile_points"]) == (0, [], 0, 0)
+    assert fe["base_fit"]["converged"] and fe["extended_fit"]["converged"]
+    assert all(e["converged"] for e in fe["evidence"].values())
 
 
 def test_update_command_rejects_bad_input(capsys):
@@ -173,6 +190,9 @@ def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
         assert s["parameters"][name]["kind"] == "fitted"
         assert s["parameters"][name]["status"] in ("determined", "bounded below",
                                                    "bounded above", "not determined")
+    cv = s["convergence"]                      # every fit of the update converged
+    assert cv["fit"] and cv["base_fit"] and cv["unconverged_fits"] == []
+    assert cv["unconverged_folds"] == cv["unconverged_profile_points"] == 0
     files = write_update(r, tmp_path)
     assert all(f.exists() for f in files)
     model = json.loads((tmp_path / "updated_model.json").read_text())

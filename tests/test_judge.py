@@ -316,7 +316,8 @@ def test_fe_level_judges_without_a_gain_only_where_none_can_be_measured():
                      {"omega2": np.full(10, 10.0)}, np.arange(10))
 
     def cand(causes, k, chi2, failed=0):
-        fit = SimpleNamespace(k=k, chi2=chi2, n=10, values={}, failed_simulations=0)
+        fit = SimpleNamespace(k=k, chi2=chi2, n=10, values={}, failed_simulations=0,
+                              converged=True)
         return FitCandidate(causes, problem=None, fit=fit, cv_done=True, cv_error=None,
                             cv_failed=failed, chi2_by_channel={"omega2": chi2})
 

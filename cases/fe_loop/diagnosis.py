@@ -16,6 +16,10 @@ realization, judged by :func:`inverse.judge.select` (fit test, so the answer can
   prediction interval (the fit's delta-method sd with bound parameters held there,
   plus the noise of the level), whether the level lies inside it, and if not by how
   many sd (``misses``, with the reason);
+* ``failures``: failed simulations, folds (a fold whose fit did not converge is a failed
+  fold), fits and profile points, and what did not converge, counted and named
+  (``unconverged_fits``, ``unconverged_fit_names``, ``unconverged_folds``,
+  ``unconverged_profile_points``; :attr:`inverse.update.Fit.converged`);
 * ``verdict_own_scatter``: where a channel's scatter far above the assumed rig
   repeatability was judged against it (:mod:`inverse.judge.prior`), the verdict with
   that scatter as the noise (every candidate and fold again) and its failures, as the
@@ -33,7 +37,7 @@ from inverse.fe_selection import held_out_errors, prediction_sd
 from inverse.profile import bounded_interval, linear_grid, run_profiles
 
 __all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "own_scatter_verdict",
-           "parameter_table", "held_out_table"]
+           "unconverged_fits", "parameter_table", "held_out_table"]
 
 FIT_RULE = "all levels but the top three (at least 5 fitted)"
 #: The acceptance tolerances of issue 13 on held-out levels.
@@ -165,7 +169,15 @@ def own_scatter_verdict(s: dict) -> dict:
     (``cap=False``): cause, also, candidate, unexplained, fit test, failures."""
     cands = s["judged"]["candidates"].values()
     return s["judged"]["selection"].verdict_json(
-        {"fits": sum(c.fit is None for c in cands), "folds": sum(c.cv_failed for c in cands)})
+        {"fits": sum(c.fit is None for c in cands), "folds": sum(c.cv_failed for c in cands),
+         "unconverged_fits": len(unconverged_fits(s))})
+
+
+def unconverged_fits(s: dict) -> list:
+    """Names of the fits of a :func:`fe_select` result (base and candidates) that gave a
+    chi2 but did not converge (:attr:`inverse.update.Fit.converged`)."""
+    return [c.name for c in s["judged"]["candidates"].values()
+            if c.fit is not None and not c.fit.converged]
 
 
 def report(data, mask, s: dict, own: dict | None = None) -> dict:
@@ -203,6 +215,14 @@ def report(data, mask, s: dict, own: dict | None = None) -> dict:
                 "folds": sum(c.cv_failed for c in judged["candidates"].values()),
                 "fits": sum(c.fit is None for c in judged["candidates"].values()),
                 "profile_points": sum(p.failed_points for p in profiles.values()),
+                "unconverged_fits": len(unconverged_fits(s)),
+                "unconverged_fit_names": unconverged_fits(s),
+                "unconverged_folds": sum(c.cv_unconverged
+                                         for c in judged["candidates"].values()),
+                "unconverged_profile_points": sum(p.unconverged_points
+                                                  for p in profiles.values()),
+                "convergence": "Gauss-Newton decrement below 1e-4 chi2 units "
+                               "(inverse.decrement)",
                 "fallbacks": {n: p.fallback_lines(data.level) for n, p in
                               (("base", base_pred), ("extended", ext_pred))}}
     summary = {

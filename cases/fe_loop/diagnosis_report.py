@@ -80,8 +80,13 @@ def format_fe(fe: dict) -> list:
         lines.append(f"  base fit started without the paper's estimator: "
                      f"{fe['estimator_start']}")
     fl = fe["failures"]
+    names = fl.get("unconverged_fit_names") or []
     lines.append(f"  failures: {fl['simulations']} simulations, {fl['folds']} folds, "
-                 f"{fl['fits']} fits, {fl['profile_points']} profile points")
+                 f"{fl['fits']} fits, {fl['profile_points']} profile points; not converged: "
+                 f"{fl.get('unconverged_fits', 0)} fits"
+                 + (f" ({', '.join(names)})" if names else "")
+                 + f", {fl.get('unconverged_folds', 0)} folds, "
+                 f"{fl.get('unconverged_profile_points', 0)} profile points")
     lines.append("  steady states reached by a fallback: " + "; ".join(
         f"{name} model {', '.join(fb) or 'none'}" for name, fb in fl["fallbacks"].items()))
     lines.append("  parameters (fitted; interval 95 %):")

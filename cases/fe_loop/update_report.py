@@ -15,6 +15,7 @@ from statistics import NormalDist
 
 import numpy as np
 
+from cases.fe_loop.diagnosis import unconverged_fits
 from cases.fe_loop.digits import fmt, fmt_interval
 from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
 from inverse.fe_selection import fit_test_of
@@ -80,6 +81,19 @@ def linearized_interval(value, se, lower, upper) -> dict:
     return {"interval": [max(lo, lower), min(hi, upper)],
             "status": "determined" if inside else "not determined",
             "interval_kind": kind + ("" if inside else ", cut at the bounds it crosses")}
+
+
+def _convergence(r: dict) -> dict:
+    """Which fits of an update converged (:attr:`inverse.update.Fit.converged`): the
+    updated model's, the base model's, every candidate's of the model choice (named when
+    not), its folds and the profile points."""
+    cands = r["selection"]["judged"]["candidates"].values()
+    return {"fit": r["fit"].converged, "base_fit": r["base_fit"].converged,
+            "unconverged_fits": unconverged_fits(r["selection"]),
+            "unconverged_folds": sum(c.cv_unconverged for c in cands),
+            "unconverged_profile_points": sum(p.unconverged_points
+                                              for p in r["profiles"].values()),
+            "criterion": "Gauss-Newton decrement below 1e-4 chi2 units (inverse.decrement)"}
 
 
 def summary(r: dict) -> dict:
@@ -165,6 +179,7 @@ def summary(r: dict) -> dict:
             "untested": r["selection"]["untested"], "rule": "inverse.judge.select",
             "estimator_start": r["selection"]["estimator_start"],
             "failed_simulations": best.failed_simulations,
+            "convergence": _convergence(r),
             "fallbacks": pred.fallback_lines(data.level),
             "sensitivity": sens, "assumptions": assumptions,
             "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
@@ -217,6 +232,14 @@ def format_text(s: dict) -> str:
     if s["failed_simulations"] or s["fallbacks"]:
         lines.append(f"failed simulations in the fit: {s['failed_simulations']}; steady states "
                      f"reached by a fallback: {', '.join(s['fallbacks']) or 'none'}")
+    cv = s["convergence"]
+    lines.append(f"converged: updated fit {'yes' if cv['fit'] else 'NO'}, base fit "
+                 f"{'yes' if cv['base_fit'] else 'NO'}; not converged: "
+                 f"{len(cv['unconverged_fits'])} candidate fits"
+                 + (f" ({', '.join(cv['unconverged_fits'])})" if cv["unconverged_fits"]
+                    else "")
+                 + f", {cv['unconverged_folds']} folds, {cv['unconverged_profile_points']} "
+                 f"profile points")
     lines.append("misfit:")
     lines.extend(f"  - {t}" for t in s["misfit"])
     for name, sv in s["sensitivity"].items():

@@ -165,8 +165,13 @@ def format_text(r: dict, source: str) -> str:
         lines.append(f"on a bound in the {r['parameters']['model']} fit: "
                      f"{', '.join(r['at_bound'])}")
     fl = r["failures"]
+    names = (fl.get("unconverged") or {}).get("fits") or []
     lines.append(f"failures: {fl['fits']} fits, {fl['folds']} cross-validation folds, "
-                 f"{fl['held_out']} held-out fits")
+                 f"{fl['held_out']} held-out fits; not converged: "
+                 f"{fl.get('unconverged_fits', 0)} fits"
+                 + (f" ({', '.join(names)})" if names else "")
+                 + f", {fl.get('unconverged_folds', 0)} folds, "
+                 f"{fl.get('unconverged_profile_points', 0)} profile points")
     preds = r["held_out_predictions"]["levels"]
     if preds:
         inside = sum(p[c]["inside"] for p in preds for c in ("omega2", "zeta"))

@@ -12,7 +12,10 @@ in chi and in every extension's shape) and refined by Levenberg-Marquardt steps 
 Jacobian and trial steps are one batched evaluation each. A refit on a subset of the
 levels (cross-validation) starts from the same starting points as the fit to all
 levels (the grid points and extra starts it refined), never from its optimum, which
-saw the left-out level.
+saw the left-out level. Every refinement stops on the Gauss-Newton decrement
+(:mod:`inverse.diagnosis.lm`: ``chi2`` within 1e-4 of the local optimum), not on an
+iteration count; a fit whose best start did not get there is not ``converged`` and the
+diagnosis counts it (a fold that did not converge is a failed fold).
 
 Information criteria (``k`` model parameters, ``N`` data in the fit; the noise levels
 are not fitted): ``AIC = chi2 + 2k``, defined when ``N > k``. With known noise levels
@@ -27,10 +30,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from inverse.diagnosis.lm import DECREMENT_TOL, Refined, levenberg_marquardt
 from inverse.diagnosis.models import Model, Observations, design
 
-__all__ = ["Fit", "solve_nonneg", "evaluate", "refine", "fit_model", "fit_folds",
-           "profile_interval", "information_criteria"]
+__all__ = ["MAX_ITERS", "Fit", "solve_nonneg", "evaluate", "refine", "fit_model",
+           "fit_folds", "profile_interval", "information_criteria"]
+
+#: Most Levenberg-Marquardt steps of any start (fit, fold, profile point): a cap that
+#: converged fits do not reach (:mod:`inverse.diagnosis.lm`); one that does is reported.
+MAX_ITERS = 200
 
 
 @dataclass
@@ -39,7 +47,10 @@ class Fit:
 
     ``residual`` holds the standardized residuals (data - model)/sigma of *every* row
     (omega2 rows, zeta rows, response rows), so rows left out of the fit are prediction
-    errors in noise units; ``train`` the levels used."""
+    errors in noise units; ``train`` the levels used. ``converged``: the start that gave
+    ``chi2`` reached the decrement tolerance (:mod:`inverse.diagnosis.lm`), in
+    ``iterations`` steps, its last Gauss-Newton ``decrement`` (chi2 units);
+    ``unconverged_starts``: how many of the other starts did not."""
 
     model: Model
     theta: np.ndarray
@@ -55,6 +66,10 @@ class Fit:
     bic: float
     parameters: dict = field(default_factory=dict)
     starts: np.ndarray | None = None
+    converged: bool = True
+    iterations: int = 0
+    decrement: float = 0.0
+    unconverged_starts: int = 0
 
     @property
     def failed(self) -> bool:
@@ -141,85 +156,51 @@ def _rss(model, obs, theta, rows, chunk=4096):
     return np.concatenate(out)
 
 
-_LAMBDAS = np.array([1e-3, 1e-2, 1e-1, 1.0, 10.0])
-
-
-def refine(model, obs, theta, rows, iters, fixed=None):
+def refine(model, obs, theta, rows, iters, fixed=None) -> Refined:
     """Levenberg-Marquardt on the nonlinear parameters of ``B`` independent problems at
-    once (starts, or cross-validation folds): ``theta`` (B, d), ``rows`` (B, N) bool.
-
-    Box bounds by clipping. Each iteration is two batched evaluations: the forward-
-    difference Jacobians of every problem, then five trial steps each (damping 1e-3 ...
-    10 times the diagonal of J^T J); a problem stops when no trial lowers its chi2.
-    ``fixed`` (d,) bool: coordinates held at their start (a profile). Returns the
-    refined theta (B, d)."""
+    once (starts, or cross-validation folds): ``theta`` (B, d), ``rows`` (B, N) bool,
+    at most ``iters`` steps each, the coordinates ``fixed`` (d,) bool held at their start
+    (a profile); stopped on the Gauss-Newton decrement
+    (:func:`inverse.diagnosis.lm.levenberg_marquardt`: Jacobians by differences with
+    steps of 1e-4 of the box). Returns its :class:`~inverse.diagnosis.lm.Refined`
+    (theta, chi2, converged, iterations, decrement per problem)."""
     lo, hi = _bounds(model)
-    theta = np.array(theta, float)
-    B, d = theta.shape
-    rows = np.asarray(rows, bool)
-    wgt = rows.astype(float)
-    h = 1e-4 * (hi - lo)
-    _, r0, _ = evaluate(model, obs, theta, rows)
-    r0 = r0 * wgt
-    f0 = np.sum(r0**2, axis=1)
-    live = np.ones(B, bool)
-    L = _LAMBDAS.size
-    for _ in range(iters):
-        idx = np.flatnonzero(live)
-        if idx.size == 0:
-            break
-        th, rw, m = theta[idx], r0[idx], rows[idx]
-        step = np.where(th + h > hi, -h, h)                             # (b, d)
-        pts = (th[:, None, :] + step[:, :, None] * np.eye(d)).reshape(-1, d)
-        _, rj, _ = evaluate(model, obs, pts, np.repeat(m, d, axis=0))
-        rj = rj.reshape(idx.size, d, -1) * wgt[idx][:, None, :]
-        J = (rj - rw[:, None, :]) / step[:, :, None]                    # (b, d, N)
-        if fixed is not None:
-            J[:, np.asarray(fixed, bool), :] = 0.0
-        JtJ = np.einsum("bdn,ben->bde", J, J)
-        g = np.einsum("bdn,bn->bd", J, rw)
-        diag = np.maximum(np.einsum("bdd->bd", JtJ),
-                          1e-12 * np.maximum(np.einsum("bdd->b", JtJ), 1e-300)[:, None])
-        Mt = JtJ[:, None] + _LAMBDAS[None, :, None, None] * (diag[:, None, :, None]
-                                                            * np.eye(d))
-        with np.errstate(all="ignore"):
-            delta = np.linalg.solve(Mt, np.broadcast_to(g[:, None, :, None],
-                                                        (idx.size, L, d, 1)))[..., 0]
-        trial = np.clip(th[:, None, :] - np.nan_to_num(delta), lo, hi).reshape(-1, d)
-        _, rt, _ = evaluate(model, obs, trial, np.repeat(m, L, axis=0))
-        rt = rt.reshape(idx.size, L, -1) * wgt[idx][:, None, :]
-        ft = np.sum(rt**2, axis=2)
-        ft = np.where(np.isfinite(ft), ft, np.inf)
-        best = np.argmin(ft, axis=1)
-        fb = ft[np.arange(idx.size), best]
-        better = fb < f0[idx]
-        small = f0[idx] - fb < 1e-7 * np.maximum(fb, 1.0)
-        upd = idx[better]
-        theta[upd] = trial.reshape(idx.size, L, d)[better, best[better]]
-        r0[upd] = rt[better, best[better]]
-        f0[upd] = fb[better]
-        live[idx[~better | small]] = False
-    return theta
+
+    def residuals(th, m):
+        return evaluate(model, obs, th, m)[1] * m
+
+    return levenberg_marquardt(residuals, theta, rows, lo, hi, iters, fixed)
 
 
-def _finish(model, obs, cands, train, starts=None):
-    """The best of the candidate thetas on ``train`` as a :class:`Fit` (chi2 inf when
-    no candidate gives a finite one: a failed fit)."""
+def _finish(model, obs, ref: Refined, train, starts=None):
+    """The best of the refined starts ``ref`` on ``train`` as a :class:`Fit` (chi2 inf
+    when no start gives a finite one: a failed fit), converged when that start is.
+
+    "Best": the first start (in the order of the starts) whose chi2 is within
+    :data:`~inverse.diagnosis.lm.DECREMENT_TOL` of the lowest. Converged starts are
+    that close to their optimum, so a closer margin is round-off: two starts that tie
+    (a direction the training data do not determine, along which the prediction of a
+    left-out level may still move) are not told apart by the last bits of a sum."""
     rows = np.tile(train, len(obs.channels))
-    x, r, log_s = evaluate(model, obs, cands, rows)
+    x, r, log_s = evaluate(model, obs, ref.theta, rows)
     f = np.sum(r[:, rows] ** 2, axis=1)
-    i = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
+    f = np.where(np.isfinite(f), f, np.inf)
+    i = int(np.argmax(f <= f.min() + DECREMENT_TOL)) if np.isfinite(f.min()) else 0
     k = model.n_params(obs.log_r is not None)
     n = int(rows.sum())
     chi2 = float(f[i]) if np.isfinite(f[i]) else float("inf")
     aic, aicc, bic = information_criteria(chi2, k, n)
-    return Fit(model=model, theta=cands[i], linear=x[i], residual=r[i], log_s=log_s[i],
-               train=train, chi2=chi2, n_data=n, n_params=k, aic=aic, aicc=aicc,
-               bic=bic, starts=starts)
+    others = np.delete(ref.converged, i)
+    return Fit(model=model, theta=ref.theta[i], linear=x[i], residual=r[i],
+               log_s=log_s[i], train=train, chi2=chi2, n_data=n, n_params=k, aic=aic,
+               aicc=aicc, bic=bic, starts=starts,
+               converged=bool(ref.converged[i]) and np.isfinite(chi2),
+               iterations=int(ref.iterations[i]), decrement=float(ref.decrement[i]),
+               unconverged_starts=int(np.sum(~others)))
 
 
-def fit_model(model: Model, obs: Observations, train=None, start=None, iters: int = 25,
-              n_starts: int = 3, extra_starts=None) -> Fit:
+def fit_model(model: Model, obs: Observations, train=None, start=None,
+              iters: int = MAX_ITERS, n_starts: int = 3, extra_starts=None) -> Fit:
     """Fit ``model`` to the levels ``train`` (bool per row; default: all).
 
     Without ``start``: grid search over the nonlinear parameters, then refinement from
@@ -247,31 +228,34 @@ def fit_model(model: Model, obs: Observations, train=None, start=None, iters: in
             theta0 = np.vstack([theta0, np.clip(np.asarray(extra_starts, float), lo, hi)])
     else:
         theta0 = np.atleast_2d(np.asarray(start, float))
-    cands = refine(model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), iters)
-    return _finish(model, obs, cands, train, theta0)
+    ref = refine(model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), iters)
+    return _finish(model, obs, ref, train, theta0)
 
 
-def fit_folds(full: Fit, obs: Observations, trains, iters: int = 12) -> list:
+def fit_folds(full: Fit, obs: Observations, trains, iters: int = MAX_ITERS) -> list:
     """Refits of ``full``'s model to each training set of ``trains`` (F, n) bool, every
     fold refined from each of ``full.starts`` (the starting points of the fit to all
     levels, not its optimum). Returns a list of :class:`Fit` (``failed`` when no start
-    gave a finite chi2)."""
+    gave a finite chi2, not ``converged`` when its best start did not converge)."""
     trains = np.asarray(trains, bool)
     starts = full.starts if full.starts is not None else full.theta[None]
     S, F = starts.shape[0], trains.shape[0]
     rows = np.repeat(np.tile(trains, (1, len(obs.channels))), S, axis=0)
-    th = refine(full.model, obs, np.tile(starts, (F, 1)), rows, iters)
-    return [_finish(full.model, obs, th[i * S:(i + 1) * S], trains[i]) for i in range(F)]
+    ref = refine(full.model, obs, np.tile(starts, (F, 1)), rows, iters)
+    return [_finish(full.model, obs, ref.take(slice(i * S, (i + 1) * S)), trains[i])
+            for i in range(F)]
 
 
 def profile_interval(fit: Fit, obs: Observations, j: int, threshold: float,
-                     n_points: int = 13):
+                     n_points: int = 13, iters: int = MAX_ITERS):
     """Profile interval of nonlinear parameter ``j`` of ``fit``: the range of values on
     a grid over its box (plus the fitted value) where the chi2 minimized over the other
     nonlinear parameters (from the fit's starts and its optimum) stays within
     ``threshold`` of the fit's chi2 (3.84: 95 % for one parameter, Wilks). Returns
-    ``((lower, upper), failures)``; the interval reaches a bound when the bound is
-    inside it."""
+    ``((lower, upper), failures, unconverged)``: the points with no finite chi2, and
+    those whose best start did not converge (their chi2 may be too high: the interval
+    may be too narrow there); the interval reaches a bound when the bound is inside
+    it."""
     _, lo, hi, _ = fit.model.nonlinear[j]
     values = np.unique(np.r_[np.linspace(lo, hi, n_points), fit.theta[j]])
     starts = np.vstack([fit.theta[None], fit.starts]) if fit.starts is not None \
@@ -282,10 +266,15 @@ def profile_interval(fit: Fit, obs: Observations, j: int, threshold: float,
     rows = np.tile(fit.train, len(obs.channels))
     fixed = np.zeros(theta0.shape[1], bool)
     fixed[j] = True
-    th = refine(fit.model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), 15, fixed)
-    _, r, _ = evaluate(fit.model, obs, th, rows)
+    ref = refine(fit.model, obs, theta0, np.repeat(rows[None], theta0.shape[0], 0), iters,
+                 fixed)
+    _, r, _ = evaluate(fit.model, obs, ref.theta, rows)
     chi2 = np.sum(r[:, rows] ** 2, axis=1).reshape(S, values.size)
-    chi2 = np.where(np.isfinite(chi2), chi2, np.inf).min(axis=0)
+    chi2 = np.where(np.isfinite(chi2), chi2, np.inf)
+    best = np.argmin(chi2, axis=0)
+    conv = ref.converged.reshape(S, values.size)[best, np.arange(values.size)]
+    chi2 = chi2.min(axis=0)
     failures = int(np.sum(~np.isfinite(chi2)))
+    unconverged = int(np.sum(~conv & np.isfinite(chi2)))
     inside = values[chi2 - min(fit.chi2, chi2.min()) <= threshold]
-    return (float(inside.min()), float(inside.max())), failures
+    return (float(inside.min()), float(inside.max())), failures, unconverged

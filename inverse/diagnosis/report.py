@@ -6,17 +6,20 @@ held-out gain can be measured on these levels, or None), ``ambiguous`` (+ ``ambi
 who ties and what measurement separates them), ``contradictions`` (plain strings) and
 ``contradiction_details``, ``parameters`` (model, chi, ...; fitted),
 ``base_parameters``, ``base_error``, ``extended_error``, ``gain``, ``gain_held_out``,
-``error_measure``, ``evidence`` (per candidate), ``fit_test`` (the named or closest
-model against the noise), ``noise`` (per channel: source, identification and
-repeatability parts, dof), ``verdict_identification_only`` (the verdict with the
-identification's noise alone, its failed fits counted; its held-out gains are those of
-the folds with the total noise), ``verdict_own_scatter`` (where a scatter far above the
-assumed rig repeatability was judged against it: the verdict with that scatter as the
-noise, with its failed fits and folds; else None), ``closest_miss`` (when
+``error_measure``, ``evidence`` (per candidate, with whether its fit ``converged`` and
+in how many ``iterations``), ``fit_test`` (the named or closest model against the
+noise), ``noise`` (per channel: source, identification and repeatability parts, dof),
+``verdict_identification_only`` (the verdict with the identification's noise alone,
+its failed and unconverged fits counted; its held-out gains are those of the folds
+with the total noise), ``verdict_own_scatter`` (where a scatter far above the assumed
+rig repeatability was judged against it: the verdict with that scatter as the noise,
+with its failed and unconverged fits and folds; else None), ``closest_miss`` (when
 ``unexplained``), ``parameter_bounds`` (every fitted parameter of the named model with
-``at_bound``), ``at_bound`` (names), ``held_out_predictions``, ``failures``,
-``untestable``, ``separability``, ``data_warnings``, ``summary``, ``mode``, ``control``,
-``levels`` (data, fits and residuals per row, for the plots).
+``at_bound``), ``at_bound`` (names), ``held_out_predictions``, ``failures`` (fits,
+folds, held-out fits and profile points that failed or did not converge, counted and
+named: :func:`_failures`), ``untestable``, ``separability``, ``data_warnings``,
+``summary``, ``mode``, ``control``, ``levels`` (data, fits and residuals per row, for
+the plots).
 """
 from __future__ import annotations
 
@@ -60,6 +63,7 @@ def _evidence(fits, unavailable, sel):
         e = {"causes": list(f.model.causes) or ["none"], "available": True,
              "chi2": f.chi2, "n_params": f.n_params, "n_data": f.n_data, "aic": f.aic,
              "aicc": f.aicc, "bic": f.bic, "delta_bic": none.bic - f.bic,
+             "converged": f.converged, "iterations": f.iterations,
              "weight": sel.weights[name], "p_value": sel.tests[name].p_value,
              "eligible": name in sel.eligible, "why_not": sel.why_not.get(name)}
         e["delta_aicc"] = (None if f.aicc is None or none.aicc is None
@@ -101,21 +105,42 @@ def parameter_bounds(fit, obs, profiles=None, rtol: float = 1e-3) -> dict:
     return out
 
 
-def _failures(fits, cv, held, profile_failures):
+def _failures(fits, cv, held, profile_failures, profile_unconverged=0, separability=None):
+    """Every fit that failed or did not converge (:mod:`inverse.diagnosis.lm`), counted
+    and named. A fold that did not converge is a failed fold (``folds``; of them
+    ``unconverged_folds``), as is a held-out fit (``held_out``); a fit to all levels
+    that did not converge keeps its candidate but is named (``unconverged_fits``);
+    ``total`` counts them all."""
     fits_failed = [k for k, f in fits.items() if f.failed]
+    unconverged = [k for k, f in fits.items() if not f.failed and not f.converged]
     folds = {k: v[3] for k, v in cv.items() if v[3]}
+    folds_unconverged = {k: v.unconverged for k, v in cv.items() if v.unconverged}
     held_failed = [k for k, v in held.items() if v[2] is not None and v[2].failed]
+    held_unconverged = [k for k, v in held.items() if v[2] is not None
+                        and not v[2].failed and not v[2].converged]
+    profile_total = profile_failures + profile_unconverged
     return {"fits": len(fits_failed), "folds": sum(folds.values()),
-            "held_out": len(held_failed), "profile_points": profile_failures,
-            "total": len(fits_failed) + sum(folds.values()) + len(held_failed)
-            + profile_failures, "failed_fits": fits_failed, "failed_folds": folds}
+            "held_out": len(held_failed) + len(held_unconverged),
+            "profile_points": profile_total,
+            "total": len(fits_failed) + len(unconverged) + sum(folds.values())
+            + len(held_failed) + len(held_unconverged) + profile_total,
+            "failed_fits": fits_failed, "failed_folds": folds,
+            "unconverged_fits": len(unconverged), "unconverged_folds":
+            sum(folds_unconverged.values()), "unconverged_held_out": len(held_unconverged),
+            "unconverged_profile_points": profile_unconverged,
+            "unconverged_separability_fits": (separability or {}).get("unconverged_fits",
+                                                                      0),
+            "unconverged": {"fits": unconverged, "folds": folds_unconverged,
+                            "held_out": held_unconverged},
+            "convergence": "Gauss-Newton decrement below 1e-4 chi2 units "
+                           "(inverse.diagnosis.lm)"}
 
 
 def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
              unavailable, untestable, contradictions, refuted, separability, warnings,
              predictions, selection_id_only, why_id_only, profiles,
              id_only_failures=None,
-             profile_failures, selection_own_scatter=None,
+             profile_failures, profile_unconverged=0, selection_own_scatter=None,
              own_scatter_failures=None) -> dict:
     """The diagnosis as one JSON-ready dict (module doc)."""
     sel = selection
@@ -170,6 +195,10 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
     summary += own_scatter_sentence(noise.capped(), own, (cause, also))
     summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
                                   n_top)
+    if not ext.converged and not ext.failed:
+        summary += (f" The {best} fit did not converge in {ext.iterations} steps (Gauss-"
+                    f"Newton decrement {ext.decrement:.2g}): its numbers may move with "
+                    f"the optimizer.")
     if on_bound:
         summary += (f" On a bound in the {best} fit: {', '.join(on_bound)} (not treated as "
                     f"free: the prediction intervals integrate the nonlinear parameters "
@@ -210,7 +239,8 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
         "verdict_changes_with_identification_only": changes,
         "identification_only_note": why_id_only,
         "verdict_own_scatter": own,
-        "failures": _failures(fits, cv, held, profile_failures),
+        "failures": _failures(fits, cv, held, profile_failures, profile_unconverged,
+                              separability),
         "untestable": untestable,
         "separability": separability,
         "summary": summary,
@@ -235,8 +265,9 @@ def own_scatter_sentence(capped, own, verdict) -> str:
         return ""
     text = (f" The scatter of {' and '.join(capped)} is far above what a rig repeats and "
             f"was judged against {CAP_FACTOR:g} times the assumed repeatability: ")
-    failed = sum((own.get("failures") or {}).values())
-    lost = (f" ({failed} of its fits and folds failed and were left out)" if failed
+    fl = own.get("failures") or {}
+    failed = sum(fl.get(k, 0) for k in ("fits", "folds", "unconverged_fits"))
+    lost = (f" ({failed} of its fits and folds failed or did not converge)" if failed
             else "")
     if (own["cause"], own["also"]) == tuple(verdict):
         return text + f"with that scatter as the noise the verdict is the same{lost}."
@@ -251,10 +282,14 @@ def _noise_sentence(noise_json, id_only, changes, why) -> str:
     text = " Judged against the noise: " + "; ".join(parts) + "."
     if id_only is None:
         return text + f" With the identification's noise alone: not judged ({why})."
-    failed = (id_only.get("failures") or {}).get("fits")
+    fl = id_only.get("failures") or {}
+    failed, unconverged = fl.get("fits"), fl.get("unconverged_fits")
     if failed:
         text += (f" With the identification's noise alone {failed} fit(s) failed and were "
                  f"left out.")
+    if unconverged:
+        text += (f" With the identification's noise alone {unconverged} fit(s) did not "
+                 f"converge.")
     if changes:
         return text + (f" With the identification's noise alone the verdict would be "
                        f"{id_only['cause']}" + (f" + {', '.join(id_only['also'])}"

@@ -143,7 +143,7 @@ def _candidates(fits, cv, obs, refuted):
     base_err, base_failed = cv["none"][0], cv["none"][3]
     out = []
     for k, f in fits.items():
-        err, _, _, failed = cv[k]
+        err, failed = cv[k].error, cv[k].failed
         gain = None if base_err is None or err is None or err <= 0 else base_err / err
         if gain is None and k != "none":
             failed += base_failed        # a gain over the base model's failed folds
@@ -218,7 +218,8 @@ def _identification_only(models, obs, noise, cv, refuted, fits):
         sel = select(_candidates(fits, cv, obs, refuted), only)
     finally:
         obs.sigma = sig
-    return sel, None, {"fits": sum(f.failed for f in fits.values())}
+    return sel, None, {"fits": sum(f.failed for f in fits.values()),
+                       "unconverged_fits": _unconverged(fits)}
 
 
 def _own_scatter(models, obs, d, stds, raw, noise):
@@ -235,19 +236,25 @@ def _own_scatter(models, obs, d, stds, raw, noise):
     finally:
         obs.sigma = sig
     return sel, {"fits": sum(f.failed for f in fits.values()),
-                 "folds": sum(v[3] for v in cv.values())}
+                 "folds": sum(v.failed for v in cv.values()),
+                 "unconverged_fits": _unconverged(fits)}
+
+
+def _unconverged(fits) -> int:
+    """How many of ``fits`` (name -> Fit) gave a chi2 but did not converge."""
+    return sum(not f.failed and not f.converged for f in fits.values())
 
 
 def _profiles(fit, obs, dof):
-    """Profile intervals of the nonlinear parameters of ``fit`` on a bound, and the
-    failed profile points."""
-    out, failed = {}, 0
+    """Profile intervals of the nonlinear parameters of ``fit`` on a bound, the failed
+    profile points and the unconverged ones."""
+    out, failed, unconverged = {}, 0, 0
     threshold = float(stats.f.ppf(0.95, 1, dof)) if np.isfinite(dof) else 3.841
     for j, (v, (_, lo, hi, _)) in enumerate(zip(fit.theta, fit.model.nonlinear)):
         if at_bound(v, lo, hi)[0]:
-            out[j], k = profile_interval(fit, obs, j, threshold)
-            failed += k
-    return out, failed
+            out[j], k, u = profile_interval(fit, obs, j, threshold)
+            failed, unconverged = failed + k, unconverged + u
+    return out, failed, unconverged
 
 
 def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
@@ -294,8 +301,9 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
     predictions = model_averaged(       # unexplained: widened by the closest's misfit
         {k: prediction_intervals(held[k][2], obs, noise.dof,
                                  misfit_of=fits[k] if sel.unexplained else None)
-         for k in averaged if held[k][2] is not None and not held[k][2].failed}, averaged)
-    profiles, profile_failures = _profiles(fits[best], obs, effective_dof(noise))
+         for k in averaged if held[k][0] is not None}, averaged)
+    profiles, profile_failures, profile_unconverged = _profiles(fits[best], obs,
+                                                                effective_dof(noise))
     if sel.cause == "none" or sel.rivals or np.unique(obs.levels).size < 8:
         sep = separability(obs, fits, models, unavailable, T_CAUSE, W_AMBIGUOUS,
                            effective_dof(noise))
@@ -309,7 +317,7 @@ def diagnose(data: MeasuredData, mode: int | None = None) -> dict:
         unavailable=unavailable, untestable=untestable, contradictions=found,
         refuted=refuted, separability=sep, warnings=warnings, predictions=predictions,
         selection_id_only=sel_id, why_id_only=why_id, id_only_failures=id_failed,
-        profiles=profiles,
+        profiles=profiles, profile_unconverged=profile_unconverged,
         profile_failures=profile_failures, selection_own_scatter=sel_own,
         own_scatter_failures=own_failed)
     report["test"] = str(d.test[0])

@@ -21,7 +21,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from inverse.diagnosis.fit import fit_model
+from inverse.diagnosis.fit import MAX_ITERS, fit_model
 from inverse.diagnosis.causes import CATALOGUE, CAUSES
 from inverse.diagnosis.models import Model, Observations
 from inverse.diagnosis.params import physical_parameters
@@ -91,7 +91,8 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
     it).
 
     Returns ``{"inseparable": [{"causes": [A, B], "mimics": ..., "measurement": ...}],
-    "untestable": {cause: reason}}``."""
+    "untestable": {cause: reason}, "unconverged_fits": n}`` (``n`` of its fits did not
+    converge, :mod:`inverse.diagnosis.lm`)."""
     base = fits["none"]
     untestable = {m: r for m, r in unavailable.items() if "+" not in m}
     singles = []
@@ -107,7 +108,7 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
     n = obs.n
     pred = [v - base.residual[i * n:(i + 1) * n] * obs.sigma[ch]
             for i, (ch, v) in enumerate(zip(obs.channels, (obs.omega2, obs.zeta, obs.log_r)))]
-    confused = {}
+    confused, unconverged = {}, 0
     for a in singles:
         eff = signature(a, obs, bp)
         e = np.concatenate([eff[i] / obs.sigma[ch] for i, ch in enumerate(obs.channels)])
@@ -125,19 +126,26 @@ def separability(obs: Observations, fits: dict, models: list, unavailable: dict,
         unit = synth(scale)
         if np.any(unit.omega2 <= 0):              # no mode: nothing to tell apart
             continue
-        miss = fit_model(Model(), unit, start=base.theta, iters=10).chi2
+        miss_fit = fit_model(Model(), unit, start=base.theta, iters=MAX_ITERS)
+        unconverged += not miss_fit.converged
+        miss = miss_fit.chi2
         if miss <= 0:
             continue
         data_a = synth(scale * np.sqrt(need / miss))
         if np.any(data_a.omega2 <= 0):
             continue
-        ic_a = _ic(fit_model(Model((a,)), data_a, n_starts=1, iters=12), t_cause)
+        fit_a = fit_model(Model((a,)), data_a, n_starts=1, iters=MAX_ITERS)
+        unconverged += not fit_a.converged
+        ic_a = _ic(fit_a, t_cause)
         for b in singles:
             if b == a:
                 continue
-            ic_b = _ic(fit_model(Model((b,)), data_a, n_starts=1, iters=12), t_cause)
+            fit_b = fit_model(Model((b,)), data_a, n_starts=1, iters=MAX_ITERS)
+            unconverged += not fit_b.converged
+            ic_b = _ic(fit_b, t_cause)
             if ic_b - ic_a < 2.0 * np.log(1.0 / w_ambiguous):
                 confused.setdefault(frozenset((a, b)), []).append(f"{b} mimics {a}")
     inseparable = [{"causes": sorted(k, key=CAUSES.index), "mimics": v,
                     "measurement": _advice(*sorted(k))} for k, v in confused.items()]
-    return {"inseparable": inseparable, "untestable": untestable}
+    return {"inseparable": inseparable, "untestable": untestable,
+            "unconverged_fits": unconverged}

@@ -101,7 +101,7 @@ def fit_test(chi2: float, n_data: int, n_params: int, noise: NoiseModel) -> FitT
 class Candidate:
     """One explanation: ``causes`` (() for the base model), ``n_params``, ``chi2`` on
     ``n_data`` data, held-out ``gain`` (None: folds failed or too few data), ``failures``
-    (failed fits or folds), ``excluded`` (a reason it may not be named, or None),
+    (failed fits or folds; a fold whose fit did not converge is a failed fold), ``excluded`` (a reason it may not be named, or None),
     ``chi2_by_channel`` (``{channel: chi2}``, optional: the drop's degrees of freedom,
     :func:`drop_dof`), ``gain_untestable`` (why no held-out gain can be measured on
     these data at all, e.g. as many parameters as data without one level; not a
