@@ -232,7 +232,8 @@ def _select(f, Hn, Wt, poles, stab, n_modes, ob_band, band_w, peak_w, dw):
         nuisance = np.zeros(poles.size, bool)
         if n_modes is not None and keep.any():
             ok = keep.copy()
-            keep[ok], nuisance[ok] = roles(f, Hn, poles[ok], pseudo, Wt, n_modes, band_w)
+            keep[ok], nuisance[ok] = roles(f, Hn, poles[ok], pseudo, Wt, n_modes, band_w,
+                                           peak_w)
         if n_modes is None and keep.any():
             sig, F, crit = significant(f, Hn, poles[keep], pseudo, Wt)
             notes += [near_threshold(f"F-test of the pole at {abs(pk) / (2 * np.pi):.6g} Hz",

@@ -8,8 +8,10 @@ chains, and the tests that keep or drop a refined pole.
   chain.
 * :func:`roles` (``n_modes`` given): after the refinement the n poles in the band with
   the largest fitted peaks are the modes; another pole farther than a half-power width
-  from every mode (outside the band, or a second resonance such as a rattle) is a
-  *nuisance* pole, fitted beside the modes and not returned; the rest are dropped.
+  from every mode, sharper than it or with a peak of the mode indicator of its own (a
+  second resonance such as a rattle) is a *nuisance* pole, fitted beside the modes and
+  not returned; the rest are dropped (a second pole on a resonance a joint distorts is
+  wider than the mode and has no peak of its own).
 * :func:`physical`: a refined pole stays when its damping is in (1e-7, ZETA_MAX) and
   it lies in the band, or just outside it while a peak of the mode indicator inside
   the band lies within its half-power half-width (a resonance the band cuts), or
@@ -102,8 +104,14 @@ def _peaks(f, Hn, p, ps, Wt):
     return np.sqrt(np.sum(np.abs(res) ** 2, axis=0)) / (-p.real)
 
 
-def roles(f, Hn, p, ps, Wt, n_modes, band_w):
-    """(keep, nuisance) of refined poles ``p`` with ``n_modes`` asked for (module doc)."""
+def roles(f, Hn, p, ps, Wt, n_modes, band_w, peak_w):
+    """(keep, nuisance) of refined poles ``p`` with ``n_modes`` asked for (module doc):
+    a nuisance pole is farther than the larger half-power half-width from every mode
+    and either narrower than the nearest mode or has a peak of the mode indicator
+    (``peak_w``, rad/s) of its own, nearer to it than to any mode and within its
+    half-power half-width: a resonance of its own (a rattle on a mode's skirt shows no
+    peak but is sharper than the mode), not a wider second pole on a resonance that a
+    joint distorts."""
     peak = _peaks(f, Hn, p, ps, Wt)
     inside = (p.imag >= band_w[0]) & (p.imag <= band_w[1])
     order = np.argsort(-np.where(inside, peak, -np.inf), kind="stable")
@@ -111,9 +119,16 @@ def roles(f, Hn, p, ps, Wt, n_modes, band_w):
     half = -p.real
     apart = np.all(np.abs(p.imag[:, None] - p.imag[None, modes])
                    >= np.maximum(half[:, None], half[None, modes]), axis=1)
-    nuisance = apart & ~np.isin(np.arange(p.size), modes)
-    keep = nuisance | np.isin(np.arange(p.size), modes)
-    return keep, nuisance
+    own = np.zeros(p.size, bool)
+    if peak_w.size:
+        d = np.abs(peak_w[None, :] - p.imag[:, None])                         # (m, n)
+        d_mode = np.min(np.abs(peak_w[None, :] - p.imag[modes][:, None]), axis=0)
+        own = np.any((d <= half[:, None]) & (d < d_mode[None, :]), axis=1)
+    nearest = modes[np.argmin(np.abs(p.imag[:, None] - p.imag[None, modes]), axis=1)]
+    narrower = half < half[nearest]
+    is_mode = np.isin(np.arange(p.size), modes)
+    nuisance = apart & (own | narrower) & ~is_mode
+    return nuisance | is_mode, nuisance
 
 
 def runaway(start, p) -> np.ndarray:
