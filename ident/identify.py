@@ -252,6 +252,28 @@ def _select(f, Hn, Wt, poles, stab, n_modes, ob_band, band_w, peak_w, dw):
     return poles, stab, nuisance, pseudo, [n for n in notes if n]
 
 
+def _modes(f, H, Hn, poles, pseudo, near, stab, Wt):
+    """The identified modes (poles not ``near``, sorted by frequency; residues in the
+    units of ``H``, standard uncertainties of :mod:`ident.pole_uncertainty`), the
+    relative misfit and the lag-1 correlation of the weighted residuals."""
+    if not poles.size:
+        return [], float("nan"), float("nan")
+    scale = np.sqrt(np.mean(np.abs(H) ** 2, axis=0))
+    residues, fitted, wres = lsfd(f, Hn, np.concatenate([poles, pseudo]), Wt)
+    fit_error = float(np.linalg.norm(Hn - fitted) / np.linalg.norm(Hn))
+    s_w2, s_z = modal_std(poles, pole_covariance(f, Hn, poles, Wt, pseudo))
+    corr = float(np.real(np.sum(np.conj(wres[:-1]) * wres[1:]))
+                 / max(np.sum(np.abs(wres) ** 2), 1e-300))
+    modes = []
+    for r in (r for r in np.argsort(np.abs(poles)) if not near[r]):
+        wn, z = pole_to_modal(poles[r])
+        modes.append(IdentifiedMode(frequency_hz=float(wn / (2 * np.pi)), omega2=float(wn**2),
+                                    zeta=float(z), shape=residues[:, r] * scale,
+                                    pole=complex(poles[r]), stability=float(stab[r]),
+                                    omega2_std=float(s_w2[r]), zeta_std=float(s_z[r])))
+    return modes, fit_error, corr
+
+
 @_one_blas_thread
 def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
              max_order=None, weighting="auto", pseudo_modes=True) -> Identification:
@@ -325,27 +347,8 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
         near = physical(poles, band_w, w[peaks], dw)[1] | nuisance
         notes += [f"a resonance at {abs(pk) / (2 * np.pi):.6g} Hz fitted beside the "
                   f"{n_modes} mode(s) asked for (not returned)" for pk in poles[nuisance]]
-    scale = np.sqrt(np.mean(np.abs(H) ** 2, axis=0))
-    corr = float("nan")
-    if poles.size:
-        allp = np.concatenate([poles, pseudo])
-        residues, fitted, wres = lsfd(f, Hn, allp, Wt)
-        residues = residues[:, :poles.size]
-        fit_error = float(np.linalg.norm(Hn - fitted) / np.linalg.norm(Hn))
-        s_w2, s_z = modal_std(poles, pole_covariance(f, Hn, poles, Wt, pseudo))
-        corr = float(np.real(np.sum(np.conj(wres[:-1]) * wres[1:]))
-                     / max(np.sum(np.abs(wres) ** 2), 1e-300))
-    else:
-        residues, fit_error = np.zeros((H.shape[1], 0), complex), float("nan")
+    modes, fit_error, corr = _modes(f, H, Hn, poles, pseudo, near, stab, Wt)
     pseudo = np.concatenate([poles[near], pseudo])
-    idx = [r for r in np.argsort(np.abs(poles)) if not near[r]]
-    modes = []
-    for r in idx:
-        wn, z = pole_to_modal(poles[r])
-        modes.append(IdentifiedMode(frequency_hz=float(wn / (2 * np.pi)), omega2=float(wn**2),
-                                    zeta=float(z), shape=residues[:, r] * scale,
-                                    pole=complex(poles[r]), stability=float(stab[r]),
-                                    omega2_std=float(s_w2[r]), zeta_std=float(s_z[r])))
     diagram.selected_hz = np.array([m.frequency_hz for m in modes])
     if n_modes is not None and len(modes) < int(n_modes):
         raise ValueError(f"{n_modes} mode(s) requested, {len(modes)} left after the "
