@@ -325,10 +325,10 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
         raise ValueError(f"no stable pole in {lo:g}-{hi:g} Hz up to model order "
                          f"{max_order}: widen the band or raise the order")
     rep = np.array([c[0] for c in chains])
-    count = np.array([c[1] for c in chains])
+    orders = [c[1] for c in chains]
     dw = float(np.diff(w).max())
     band_w = (w[0], w[-1])
-    poles, stab = candidates(rep, count, max_order, n_modes, w[peaks], dw, band_w)
+    poles, stab = candidates(rep, orders, max_order, n_modes, w[peaks], dw, band_w)
 
     Wt = None if weighting == "uniform" else 1.0 / np.maximum(np.abs(Hn), 1e-300)
     ob_band = band_w if pseudo_modes else None

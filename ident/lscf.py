@@ -154,7 +154,7 @@ def stabilization(freq_hz, frf, pole_sets, band_w):
 
 
 def chain_representatives(lam, link, label, order):
-    """Chains of >= 2 linked poles: (representative pole, number of orders present).
+    """Chains of >= 2 linked poles: (representative pole, the orders present).
 
     The representative is the median (real and imaginary parts) of the members in
     the upper half of the chain's orders."""
@@ -163,5 +163,5 @@ def chain_representatives(lam, link, label, order):
         members = np.flatnonzero(label == lab)
         top = members[order[members] >= np.median(order[members])]
         rep = np.median(lam[top].real) + 1j * np.median(lam[top].imag)
-        chains.append((rep, np.unique(order[members]).size))
+        chains.append((rep, np.unique(order[members])))
     return chains

@@ -2,9 +2,9 @@
 chains, and the tests that keep or drop a refined pole.
 
 * :func:`candidates`: one chain per physical mode (shorter chains within 0.5 % or a
-  half-power width of a longer one are the same mode); a chain present at
-  >= max(3, 20 %) of the orders (half that near a peak of the mode indicator) is a
-  candidate; ``n_modes`` given: the n longest chains in the band and every other long
+  half-power width of a longer one are the same mode, present at the union of their
+  orders); a chain present at >= max(3, 20 %) of the orders (half that near a peak of
+  the mode indicator) is a candidate; ``n_modes`` given: the n longest chains in the band and every other long
   chain.
 * :func:`roles` (``n_modes`` given): after the refinement the n poles in the band with
   the largest fitted peaks are the modes; another pole farther than a half-power width
@@ -62,12 +62,19 @@ def near_threshold(what: str, value: float, threshold: float) -> str | None:
     return None
 
 
-def candidates(rep, count, n_orders, n_modes, peak_w, dw, band_w):
-    """Candidate poles from the chains' representatives ``rep`` (rad/s) and lengths
-    ``count`` (module doc). ``peak_w``: the mode indicator's peaks (rad/s); ``dw`` the
-    largest line spacing (rad/s). Returns (poles, stability = count / n_orders) or
-    raises ValueError when ``n_modes`` chains are not there; with ``n_modes`` the other
-    long chains come too (their roles are set after the refinement, :func:`roles`)."""
+def candidates(rep, orders, n_orders, n_modes, peak_w, dw, band_w):
+    """Candidate poles from the chains' representatives ``rep`` (rad/s) and the model
+    orders each chain is present at (``orders``, a list of int arrays; module doc).
+    ``peak_w``: the mode indicator's peaks (rad/s); ``dw`` the largest line spacing
+    (rad/s). Returns (poles, stability = count / n_orders) or raises ValueError when
+    ``n_modes`` chains are not there; with ``n_modes`` the other long chains come too
+    (their roles are set after the refinement, :func:`roles`).
+
+    Chains of one mode (within 0.5 % or a half-power width of a longer one) are one
+    candidate present at the union of their orders: the linking of a heavily damped
+    mode's poles across orders breaks at places that round-off decides, and so would
+    the length of each piece."""
+    count = np.array([o.size for o in orders])
     wn, z = pole_to_modal(rep)
     keep = np.ones(rep.size, bool)
     for i in np.argsort(-count, kind="stable"):
@@ -75,8 +82,12 @@ def candidates(rep, count, n_orders, n_modes, peak_w, dw, band_w):
             continue
         close = (np.abs(wn - wn[i]) < np.maximum(0.5 * STABLE_FREQ * wn[i], z[i] * wn[i])) & keep
         close[i] = False
-        keep[close & (count <= count[i])] = False
-    rep, count = rep[keep], count[keep]
+        merged = close & (count <= count[i])
+        keep[merged] = False
+        orders[i] = np.unique(np.concatenate([orders[i]] + [orders[j] for j in
+                                                            np.flatnonzero(merged)]))
+    rep = rep[keep]
+    count = np.array([o.size for o, k in zip(orders, keep) if k])
     wn, z = pole_to_modal(rep)
     need = max(3, int(np.ceil(0.2 * n_orders)))
     inside = (rep.imag >= band_w[0]) & (rep.imag <= band_w[1])
@@ -95,6 +106,7 @@ def candidates(rep, count, n_orders, n_modes, peak_w, dw, band_w):
                              f"{n_modes} requested")
         others = np.flatnonzero((count >= need) & ~np.isin(np.arange(rep.size), chosen))
         chosen = np.concatenate([chosen, others])
+    chosen = chosen[np.argsort(wn[chosen], kind="stable")]       # a canonical order
     return rep[chosen], count[chosen] / n_orders
 
 
