@@ -31,9 +31,10 @@ at the returned optimum, ``g_F^T (J_F^T J_F)^+ g_F`` with ``g = J^T r`` from the
 optimizer's last Jacobian (taken at the returned point) over the free parameters
 ``F`` (a parameter at its bound, in the sense of ``at_bound`` or of the optimizer's
 active set, with the gradient pushing outward, is held), at most
-:data:`~inverse.decrement.DECREMENT_TOL` = 1e-4 chi2 units, and no failed simulation
-there. It is the criterion of every fit of the diagnosis, and it is statistical: chi2
-within 1e-4 of the local optimum, the parameters within 0.01 standard errors of it.
+:data:`~inverse.decrement.ACCEPT_TOL` = 1e-2 chi2 units (the parameters within 0.1
+standard errors of the optimum; the fit aims at :data:`~inverse.decrement.DECREMENT_TOL`
+= 1e-4, the margin of :mod:`inverse.decrement`), and no failed simulation there. It is
+the criterion of every fit of the diagnosis, and it is statistical.
 Why not scipy's own stop: its ``ftol``/``xtol`` tests are relative changes between
 iterates; ``xtol`` (status 3) is met when the trust region has shrunk, also far from
 an optimum (a finite-difference Jacobian across a failed simulation, a parameter a
@@ -61,7 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from inverse.decrement import DECREMENT_TOL, gauss_newton_decrement
+from inverse.decrement import ACCEPT_TOL, DECREMENT_TOL, gauss_newton_decrement
 
 __all__ = ["SIMULATION_FAILURES", "InternalError", "Parameter", "NoiseModel", "UpdateProblem",
            "Fit", "fit"]
@@ -353,5 +354,5 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
                success=bool(res.success) and ok,
                message=str(res.message), at_bound=side,
                failed_simulations=problem.failures - failed0,
-               converged=ok and dec <= DECREMENT_TOL, decrement=dec, status=int(res.status),
+               converged=ok and dec <= ACCEPT_TOL, decrement=dec, status=int(res.status),
                feasible=ok)

@@ -10,11 +10,12 @@ Convergence: the Gauss-Newton decrement of :mod:`inverse.decrement` within the b
 point within reach of the box; ``g_F^T (J_F^T J_F)^+ g_F`` when that is reached), ``F``
 the coordinates not held: not ``fixed``, not on
 a bound the gradient pushes against (descent would leave the box), not at a kink
-(below). A problem is converged when ``delta <= tol`` (default
+(below). A problem stops when ``delta <= tol`` (default
 :data:`~inverse.decrement.DECREMENT_TOL` = 1e-4: chi2 within 1e-4 of the local optimum,
-theta within 0.01 standard errors of it). A problem that reaches the iteration cap, or
-whose steps no longer lower chi2 at any damping (stalled), is *not* converged, and
-says so.
+theta within 0.01 standard errors of it) and is converged when its last ``delta`` is
+at most :data:`~inverse.decrement.ACCEPT_TOL` = 1e-2 (the margin of
+:mod:`inverse.decrement`). A problem that reaches the iteration cap, or whose steps no
+longer lower chi2 at any damping (stalled), above that is *not* converged, and says so.
 
 Jacobian: forward differences, step ``h`` (a fraction of the box, into the box), one
 batched evaluation of ``d`` points per problem, for the steps. Their ``O(h)`` error
@@ -59,7 +60,7 @@ from typing import Callable
 
 import numpy as np
 
-from inverse.decrement import DECREMENT_TOL, gauss_newton_decrement
+from inverse.decrement import ACCEPT_TOL, DECREMENT_TOL, gauss_newton_decrement
 
 __all__ = ["DECREMENT_TOL", "MU_MAX", "DAMPING_FLOOR", "KINK_JUMP", "Refined", "decrement",
            "levenberg_marquardt"]
@@ -238,6 +239,7 @@ def levenberg_marquardt(residuals: Callable, theta, rows, lo, hi, iters: int,
         stale[idx[took]] = True
         stale[redo] = True
         live[more[mu[more] > MU_MAX]] = False
+    conv |= dec <= ACCEPT_TOL          # converged within the margin (inverse.decrement)
     return Refined(theta, f0, conv, its, dec)
 
 
