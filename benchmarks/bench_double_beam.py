@@ -12,7 +12,7 @@ the 3rd and 5th in-phase bending modes (134.4 and 407.9 Hz; 0.43 % at 252 Hz). D
 1 N at the exciter (lower strip, 50 mm from the clamp), near the 252 Hz mode, where the
 glue slips up to about 0.48 ``phi_max`` (micro-slip). Output: the response DOF (upper
 strip at the exciter) and the five joint slips. These are benchmark choices, not the
-paper reproduction's (cases/double_beam_reproduction.py).
+paper reproduction's (`cases/double_beam/study.py`).
 
 1. Reduced vs full Newmark, one steady state from rest at the line of the resonance
    peak (:class:`runs.stepped_sine.NewmarkProtocol`, 256 steps per period, the line is

@@ -7,7 +7,7 @@ impulse at the drive point (:func:`runs.ringdown.impulse_start`) scaled so that 
 stuck-joint mode would reach the start amplitude. :func:`runs.ringdown.ring_down`
 integrates the reduced model with its joints (average-acceleration rule, pre-warped
 time axis, energy balance) and the record is written chunk by chunk to a free-decay
-CSV (``shared/spec/measured-data.md``, ``# test = free-decay``): the displacement at the
+CSV (``docs/formats/measured-data.md``, ``# test = free-decay``): the displacement at the
 case's drive and response points. :mod:`cases.ringdown_routes` then identifies it and
 compares it with the backbone and the response-controlled virtual test.
 

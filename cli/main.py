@@ -107,6 +107,10 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
             "from damping growth, prediction at untested levels, and model diagnosis."
         ),
     )
+    parser.add_argument("--units-confirmed", action="store_true",
+                        help="values that look like another unit (a case file in "
+                             "millimetres, E in MPa, zeta in percent) are right: run on "
+                             "instead of stopping with one line (ident.units)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in names:
         try:
@@ -167,7 +171,19 @@ def _run(argv) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 0
-    return int(args.func(args) or 0)
+    if not args.units_confirmed:
+        return int(args.func(args) or 0)
+    from ident.units import ENVIRONMENT      # numpy-free; worker processes inherit it
+
+    before = os.environ.get(ENVIRONMENT)
+    os.environ[ENVIRONMENT] = "1"
+    try:
+        return int(args.func(args) or 0)
+    finally:
+        if before is None:
+            os.environ.pop(ENVIRONMENT, None)
+        else:
+            os.environ[ENVIRONMENT] = before
 
 
 def main(argv: list[str] | None = None) -> int:

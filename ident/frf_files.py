@@ -1,6 +1,6 @@
 """FRF files: one FRF set (one reference, one or more response points) per file.
 
-CSV format (written and read here; ``shared/spec/measured-data.md``, "FRF files of a
+CSV format (written and read here; ``docs/formats/measured-data.md``, "FRF files of a
 stepped-sine series")::
 
     # quantity = receptance

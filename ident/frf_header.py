@@ -1,6 +1,6 @@
 """The header keys of an FRF file of a stepped-sine series and their rules.
 
-``shared/spec/measured-data.md``, "FRF files of a stepped-sine series": ``quantity``,
+``docs/formats/measured-data.md``, "FRF files of a stepped-sine series": ``quantity``,
 ``control`` (force | response), ``run_order`` (integer >= 1), ``excitation`` (the held
 level, > 0), ``reference`` (the drive point) and ``test`` (``stepped-sine``,
 ``random``: an H1 FRF averaged over a broadband random record, the excitation its

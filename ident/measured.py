@@ -1,6 +1,6 @@
 """Measured amplitude-dependent modal data: the CSV reader and writer.
 
-Format: ``shared/spec/measured-data.md`` (one header line, one row per level and mode,
+Format: ``docs/formats/measured-data.md`` (one header line, one row per level and mode,
 no comment lines). Required columns ``level`` (1-based), ``excitation`` (> 0, any unit
 proportional to force), ``omega2`` (rad^2/s^2, > 0), ``zeta`` (fraction in (0, 1));
 optional ``mode`` (default 1), ``response_amplitude`` (> 0), ``run_order`` (default
@@ -31,8 +31,10 @@ amplitude, so ``response_amplitude`` is required and must increase with ``level`
 ``excitation`` (force needed at resonance) need not increase. Under force control the
 excitation must increase with ``level``.
 
-Warnings (kept in :attr:`MeasuredData.warnings`): a ``zeta`` median above 0.2 (percent?),
-per mode, ratios of the held amplitude between successive levels that differ from
+A ``zeta`` median above 0.2 is taken for percent: one line, exit status 2, unless the run
+is started with ``iwanfe --units-confirmed`` (:mod:`ident.units`; then a warning).
+
+Warnings (kept in :attr:`MeasuredData.warnings`): per mode, ratios of the held amplitude between successive levels that differ from
 their median by more than 5 %, and every non-empty ``x_warning`` annotation (the
 identification's warnings, :func:`ident.modal_data.annotation_warnings`).
 
@@ -50,6 +52,7 @@ import numpy as np
 
 from ident.errors import InputError, text_file
 from ident.modal_data import TESTS, MeasuredData, annotation_warnings
+from ident.units import FLAG, LIMITS, refuse
 
 REQUIRED_COLUMNS = ("level", "excitation", "omega2", "zeta")
 OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order", "omega2_std", "zeta_std",
@@ -57,7 +60,7 @@ OPTIONAL_COLUMNS = ("mode", "response_amplitude", "run_order", "omega2_std", "ze
 CONTROLS = ("force", "response")
 KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_LEVELS = 4
-PERCENT_ZETA_MEDIAN = 0.2
+PERCENT_ZETA_MEDIAN = LIMITS["zeta"][1][0]
 RATIO_TOLERANCE = 0.05
 
 
@@ -160,7 +163,7 @@ def _check_increasing(source, m, name, level, e, lines) -> None:
 
 
 def read_measured(path) -> MeasuredData:
-    """Read and validate a measured-data CSV file (``shared/spec/measured-data.md``).
+    """Read and validate a measured-data CSV file (``docs/formats/measured-data.md``).
 
     Parameters
     ----------
@@ -297,8 +300,11 @@ def read_measured(path) -> MeasuredData:
                 f"{source}: mode {m}: {name} ratios between successive levels are not "
                 f"constant ({ratio.min():.3g} to {ratio.max():.3g}, median {median:.3g})")
     if np.median(zeta) > PERCENT_ZETA_MEDIAN:
+        # percent is the likely unit: one line (exit 2) unless confirmed (ident.units)
+        refuse(f"{source}: zeta median", "zeta", float(np.median(zeta)))
         warnings.insert(0, f"{source}: zeta median {np.median(zeta):.3g} > "
-                        f"{PERCENT_ZETA_MEDIAN}: is zeta in percent? it must be a fraction")
+                        f"{PERCENT_ZETA_MEDIAN}: is zeta in percent? it must be a fraction "
+                        f"(confirmed by {FLAG})")
 
     extra = {}
     for name in header:
@@ -382,7 +388,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help"):
         print("usage: python -m ident.measured FILE...\n"
-              "Validate measured-data CSV files (shared/spec/measured-data.md).")
+              "Validate measured-data CSV files (docs/formats/measured-data.md).")
         return 0 if argv else 2
     for name in argv:
         try:

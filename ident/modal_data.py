@@ -1,6 +1,6 @@
 """Amplitude-dependent modal data in memory: one entry per (mode, level).
 
-The table of ``shared/spec/measured-data.md`` as arrays; :mod:`ident.measured` reads and
+The table of ``docs/formats/measured-data.md`` as arrays; :mod:`ident.measured` reads and
 writes it as CSV, :mod:`ident.tracking` builds it from identified levels. SI units:
 ``omega2`` in rad^2/s^2, ``zeta`` as a fraction.
 """
@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-#: Test types of ``shared/spec/measured-data.md`` ("Other test types").
+#: Test types of ``docs/formats/measured-data.md`` ("Other test types").
 TESTS = ("stepped-sine", "random", "free-decay")
 
 
@@ -36,7 +36,7 @@ class MeasuredData:
         ``"force"`` or ``"response"`` per entry (what the level held constant).
     test : ndarray of str
         ``"stepped-sine"`` (default), ``"random"`` or ``"free-decay"`` per entry
-        (:data:`TESTS`; ``shared/spec/measured-data.md``, "Other test types").
+        (:data:`TESTS`; ``docs/formats/measured-data.md``, "Other test types").
     extra : dict[str, ndarray]
         ``x_*`` annotation columns: float arrays where every value is numeric, else
         str arrays.

@@ -1,6 +1,6 @@
 """FRF sets of a random-excitation series: the response RMS of a mode, the test's signature.
 
-``shared/spec/measured-data.md``, "Other test types": a ``random`` level is an H1 FRF
+``docs/formats/measured-data.md``, "Other test types": a ``random`` level is an H1 FRF
 averaged over a broadband random record; its ``excitation`` is the drive RMS and its
 ``response_amplitude`` the response RMS in the mode's band.
 

@@ -1,6 +1,6 @@
 """A stepped-sine series from its FRF files: identification of every level, loading.
 
-``shared/spec/measured-data.md``, "FRF files of a stepped-sine series". Each file is one
+``docs/formats/measured-data.md``, "FRF files of a stepped-sine series". Each file is one
 level (:mod:`ident.frf_files`; its header says what the level held, ``control``,
 ``run_order``, the drive point). :func:`identify_series` identifies every level
 (:func:`ident.identify.identify`) and then makes the levels agree on the number of

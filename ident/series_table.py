@@ -1,6 +1,6 @@
 """The measured-data table of an identified stepped-sine series.
 
-``shared/spec/measured-data.md``: :func:`series_table` follows the modes of the levels
+``docs/formats/measured-data.md``: :func:`series_table` follows the modes of the levels
 of :func:`ident.series.identify_series` across levels (:func:`ident.tracking.track_modes`)
 and writes one row per mode and level:
 

@@ -1,6 +1,6 @@
 """Time records of a free-decay test (CSV, UFF 58 time data): read and write.
 
-``shared/spec/measured-data.md``, "Other test types", ``free-decay``. CSV::
+``docs/formats/measured-data.md``, "Other test types", ``free-decay``. CSV::
 
     # test = free-decay
     # quantity = displacement

@@ -171,7 +171,7 @@ def track_modes(held, results):
 
 
 def modal_data_from_levels(excitation, results, run_order=None, sources=None):
-    """Measured-data table (``shared/spec/measured-data.md``) from identified levels.
+    """Measured-data table (``docs/formats/measured-data.md``) from identified levels.
 
     Parameters
     ----------

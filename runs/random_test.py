@@ -2,7 +2,7 @@
 
 The industrial test of a jointed structure: a shaker drives broadband Gaussian noise at
 a few RMS levels and each level gives an H1 FRF averaged over the record (``random`` in
-``shared/spec/measured-data.md``). Here the reduced model with its joints
+``docs/formats/measured-data.md``). Here the reduced model with its joints
 (:mod:`fe.reduction`) is driven by ``f(t) = e(t) * load`` with ``e`` a seeded Gaussian
 sequence whose spectrum is flat in ``band_hz`` and zero outside (:func:`band_limited_noise`,
 scaled to the RMS asked), integrated by the average-acceleration rule on the pre-warped

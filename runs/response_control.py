@@ -5,7 +5,7 @@ every line of a level the force amplitude ``F`` is adjusted until the first harm
 the response at the control DOF ``d`` has the held amplitude ``A``. Along the lines of a
 level the joints then see (nearly) one amplitude, so each level's FRF is that of the
 structure linearized at one amplitude and a linear modal fit of it gives a point of the
-backbone (``control = response`` in ``shared/spec/measured-data.md``).
+backbone (``control = response`` in ``docs/formats/measured-data.md``).
 
 At one line ``w`` the condensed harmonic balance of :mod:`fe.harmonic_balance`
 (``S_h = F S_h^lin - R_h G_h(S)``, with ``S^lin`` the linear slips per newton of the

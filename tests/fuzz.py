@@ -101,7 +101,7 @@ def _one_line_error(exc: InputError, path: Path) -> None:
 
 
 def check_measured(data) -> None:
-    """The measured-data contract (shared/spec/measured-data.md), checked here."""
+    """The measured-data contract (docs/formats/measured-data.md), checked here."""
     n = len(data.level)
     for name in ("excitation", "omega2", "zeta", "mode", "run_order"):
         assert np.shape(getattr(data, name)) == (n,), name

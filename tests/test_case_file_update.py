@@ -98,3 +98,24 @@ def test_cli_update_on_the_case_file(capsys):
     assert s["case"] == "bolted-lap-cantilever" and s["cause"] == "none"
     assert abs(s["parameters"]["chi"]["value"] - CHI_SEEDED) < 0.1
     assert s["parameters"]["log10_kt"]["value"] == 7.0          # the file's kt, assumed
+
+
+def test_cli_update_with_the_joint_left_to_be_fitted(tmp_path, capsys):
+    """The spec lets a file leave chi, fs and beta to ``update``: the same file without
+    them updates (exit 0; it crashed formatting the absent chi), says they were left to
+    be fitted, and fits chi within 0.1 of the seed as the full file does."""
+    import json
+    import re
+    import shutil
+
+    from cli.main import main
+
+    text = re.sub(r"(?m)^(chi|fs|beta) = .*\n", "", LAP.read_text())
+    assert text != LAP.read_text() and "\nchi =" not in text
+    (tmp_path / LAP.name).write_text(text)
+    table = tmp_path / "bolted-lap-cantilever-levels.csv"
+    shutil.copy(LAP.parent / table.name, table)
+    assert main(["update", "--case", str(tmp_path / LAP.name), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert any("chi, fs, beta left to be fitted" in n for n in s["notes"]), s["notes"]
+    assert abs(s["parameters"]["chi"]["value"] - CHI_SEEDED) < 0.1

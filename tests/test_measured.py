@@ -1,4 +1,4 @@
-"""Measured-data CSV reader: every rule of shared/spec/measured-data.md."""
+"""Measured-data CSV reader: every rule of docs/formats/measured-data.md."""
 from __future__ import annotations
 
 import subprocess
@@ -184,10 +184,19 @@ def test_extra_structural_errors(tmp_path):
     assert error_of(p) == f"{p}:1:level: duplicate column name"
 
 
-def test_warning_percent_zeta(tmp_path):
+def test_percent_zeta_is_one_line_unless_confirmed(tmp_path, monkeypatch):
+    """A zeta median of 0.27 (percent written as a fraction): refused in one line naming
+    the flag; with the flag's environment set (ident.units) a warning."""
+    from ident.units import ENVIRONMENT
+
     rows = [",".join(r.split(",")[:3] + [str(z)]) for r, z in
             zip(ROWS, [0.25, 0.26, 0.27, 0.28, 0.29])]
-    d = read_measured(write(tmp_path, "\n".join([HEADER] + rows) + "\n"))
+    p = write(tmp_path, "\n".join([HEADER] + rows) + "\n")
+    assert error_of(p) == (f"{p}: zeta median: 0.27 is above 0.2: percent (zeta is a fraction:"
+                           f" 0.01278 for 1.278 %)? (if the value is right: iwanfe "
+                           f"--units-confirmed ...)")
+    monkeypatch.setenv(ENVIRONMENT, "1")
+    d = read_measured(p)
     assert len(d.warnings) == 1 and "percent" in d.warnings[0]
     assert read_measured(good(tmp_path)).warnings == []
 

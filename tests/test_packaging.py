@@ -1,8 +1,10 @@
 """The wheel built by ``pip wheel .``: it holds every package and module of the source
-tree and the shipped data files, the build prints no setuptools warning about packages
-absent from the configuration, it declares the project's dependencies, and, installed
-in a fresh virtual environment (the dependencies taken from this one), its ``iwanfe``
-command runs from there.
+tree and every other file below them (the shipped case files and their measured
+tables), the build prints no setuptools warning about packages absent from the
+configuration, it declares the project's dependencies, and, installed in a fresh
+virtual environment (the dependencies taken from this one), its ``iwanfe`` command runs
+from there: ``joint``, ``case check`` on every shipped case and the main job
+(``loop --case double-beam``).
 
 Truth: the source tree itself (every folder with ``__init__.py``, every module, the files
 of ``cases/data``) and, for the installed command, the closed form of the four-parameter
@@ -26,7 +28,6 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
 import zipfile
 from pathlib import Path
 
@@ -36,7 +37,6 @@ from scipy.integrate import quad
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "cases", "cli", "viz")
-DATA_FILES = ("cases/data/double_beam_measured.csv", "cases/data/README.md")
 # setuptools' message when a folder holding shipped files is not a configured package
 ABSENT = re.compile(r"absent from the .?packages.? configuration|Package would be ignored")
 # what the build does not need: environments, build products, caches, outputs
@@ -74,32 +74,49 @@ def wheel(tmp_path_factory):
 
 
 def _source_files():
-    """Every module of the packages (relative posix paths) and the package folders."""
-    modules, packages = set(), set()
+    """(modules, package folders, data files) of the packages, relative posix paths: a
+    data file is any other file below a package (case files, their tables, READMEs),
+    caches and compiled files aside."""
+    modules, packages, data = set(), set(), set()
     for top in PACKAGES:
-        for f in (ROOT / top).rglob("*.py"):
-            if "__pycache__" in f.parts:
+        for f in (ROOT / top).rglob("*"):
+            if "__pycache__" in f.parts or not f.is_file() or f.suffix == ".pyc":
                 continue
-            modules.add(f.relative_to(ROOT).as_posix())
-            if f.name == "__init__.py":
-                packages.add(f.parent.relative_to(ROOT).as_posix())
-    return modules, packages
+            rel = f.relative_to(ROOT).as_posix()
+            if f.suffix == ".py":
+                modules.add(rel)
+                if f.name == "__init__.py":
+                    packages.add(f.parent.relative_to(ROOT).as_posix())
+            else:
+                data.add(rel)
+    return modules, packages, data
+
+
+def test_source_tree_has_the_shipped_case_files():
+    """The files the wheel test expects include the shipped cases (a glob that found
+    nothing would make it vacuous)."""
+    from cases.registry import CASE_FILES
+
+    _, _, data = _source_files()
+    for path in CASE_FILES.values():
+        assert Path(path).relative_to(ROOT).as_posix() in data
+    assert "cases/data/double_beam_measured.csv" in data
 
 
 def test_wheel_holds_every_package_module_and_data_file(wheel):
     path, _ = wheel
     names = set(zipfile.ZipFile(path).namelist())
-    modules, packages = _source_files()
+    modules, packages, data = _source_files()
     assert set(PACKAGES) <= packages and "cli/commands" in packages
     missing_packages = sorted(p for p in packages if f"{p}/__init__.py" not in names)
     assert not missing_packages, f"packages not in the wheel: {missing_packages}"
     missing_modules = sorted(modules - names)
     assert not missing_modules, f"modules not in the wheel: {missing_modules}"
-    missing_data = sorted(set(DATA_FILES) - names)
+    missing_data = sorted(data - names)
     assert not missing_data, f"data files not in the wheel: {missing_data}"
     # and nothing else: no module absent from the tree, no stray folder
     extra = sorted(n for n in names if not n.startswith("iwanfe-")
-                   and n not in modules and n not in DATA_FILES)
+                   and n not in modules and n not in data)
     assert not extra, f"files in the wheel that the source tree does not ship: {extra}"
 
 
@@ -144,38 +161,51 @@ def test_wheel_declares_the_projects_dependencies(wheel):
     assert declared == {d.replace(" ", "") for d in project["dependencies"]}
 
 
-@pytest.mark.slow
-def test_installed_wheel_runs_joint_command(wheel):
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory):
     """Fresh venv, ``pip install --no-deps <wheel>`` with this environment's
     site-packages appended to its path (a ``.pth`` line: the dependencies, not this
-    checkout, whose editable hook is not run), then the installed ``iwanfe joint``
-    against the closed form."""
+    checkout, whose editable hook is not run). Returns (venv, environment, a working
+    folder outside the checkout)."""
     import site
 
     path, _ = wheel
-    chi, K_T, F_S, beta, A = -0.5, 1.1e5, 400.0, 4.0, 1e-3
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
-    with tempfile.TemporaryDirectory(prefix="iwanfe-venv-") as tmp:
-        venv = Path(tmp) / "venv"
-        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=120)
-        py = venv / "bin" / "python"
-        (own,) = (venv / "lib").glob("python3*/site-packages")
-        (own / "iwanfe-test-dependencies.pth").write_text("\n".join(site.getsitepackages()))
-        inst = subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", str(path)],
-                              env=env, capture_output=True, text=True, timeout=600)
-        assert inst.returncode == 0, (inst.stdout + inst.stderr)[-3000:]
-        # imports resolve to the installed copy and the data file ships with it
-        where = subprocess.run(
-            [str(py), "-c", "import cases.paper_data as p, fe; "
-             "print(fe.__file__); print(p.DATA_FILE.is_file())"],
-            cwd=tmp, env=env, capture_output=True, text=True, timeout=120, check=True)
-        fe_file, data_ok = where.stdout.split()
-        assert Path(fe_file).is_relative_to(venv), fe_file
-        assert data_ok == "True"
-        run = subprocess.run(
-            [str(venv / "bin" / "iwanfe"), "joint", "--chi", str(chi), "--kt", str(K_T),
-             "--fs", str(F_S), "--beta", str(beta), "--amplitude", str(A), "--json"],
-            cwd=tmp, env=env, capture_output=True, text=True, timeout=300)
+    tmp = tmp_path_factory.mktemp("iwanfe-venv")
+    venv = tmp / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=120)
+    py = venv / "bin" / "python"
+    (own,) = (venv / "lib").glob("python3*/site-packages")
+    (own / "iwanfe-test-dependencies.pth").write_text("\n".join(site.getsitepackages()))
+    inst = subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", str(path)],
+                          env=env, capture_output=True, text=True, timeout=600)
+    assert inst.returncode == 0, (inst.stdout + inst.stderr)[-3000:]
+    work = tmp / "work"
+    work.mkdir()
+    return venv, env, work
+
+
+def _iwanfe(installed, *args, timeout=300):
+    venv, env, work = installed
+    return subprocess.run([str(venv / "bin" / "iwanfe"), *args], cwd=work, env=env,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.mark.slow
+def test_installed_wheel_runs_joint_command(installed):
+    """The installed ``iwanfe joint`` against the closed form; imports resolve to the
+    installed copy and the measured data file ships with it."""
+    venv, env, work = installed
+    chi, K_T, F_S, beta, A = -0.5, 1.1e5, 400.0, 4.0, 1e-3
+    where = subprocess.run(
+        [str(venv / "bin" / "python"), "-c", "import cases.paper_data as p, fe; "
+         "print(fe.__file__); print(p.DATA_FILE.is_file())"],
+        cwd=work, env=env, capture_output=True, text=True, timeout=120, check=True)
+    fe_file, data_ok = where.stdout.split()
+    assert Path(fe_file).is_relative_to(venv), fe_file
+    assert data_ok == "True"
+    run = _iwanfe(installed, "joint", "--chi", str(chi), "--kt", str(K_T), "--fs", str(F_S),
+                  "--beta", str(beta), "--amplitude", str(A), "--json")
     assert run.returncode == 0, run.stderr[-3000:]
     out = json.loads(run.stdout)
     truth = _iwan_closed_form(chi, K_T, F_S, beta, A)
@@ -186,6 +216,32 @@ def test_installed_wheel_runs_joint_command(wheel):
     for key in ("dissipation_per_cycle", "stiffness_quadrature"):
         assert amp[key] == pytest.approx(truth[key], rel=1e-12), key
     assert amp["stiffness_in_phase"] == pytest.approx(truth["stiffness_in_phase"], rel=1e-9)
+
+
+@pytest.mark.slow
+def test_installed_wheel_checks_every_shipped_case_and_runs_the_main_job(installed):
+    """``iwanfe case check NAME`` on every shipped case file, from the installed copy
+    (file and measured table inside the venv), and ``iwanfe loop --case double-beam``.
+    Truth for the double beam's mass: two aluminium strips 350 x 50 x 1 mm at 2700
+    kg/m^3 plus the point masses its TOML lists (2 g drive mass, three 1 g sensors)."""
+    from cases.registry import CASE_FILES
+
+    venv = installed[0]
+    for name in CASE_FILES:
+        run = _iwanfe(installed, "case", "check", "--json", name)
+        assert run.returncode == 0, f"{name}: {run.stderr[-3000:]}"
+        out = json.loads(run.stdout)
+        assert Path(out["file"]).is_relative_to(venv), out["file"]
+        assert Path(out["measured_data"]["file"]).is_relative_to(venv), out["measured_data"]
+        if name == "double-beam":
+            strips = 2 * 2700.0 * 0.350 * 0.050 * 0.001
+            assert out["mass_kg"] == pytest.approx(strips + 0.002 + 3 * 0.001, rel=1e-12)
+    run = _iwanfe(installed, "loop", "--case", "double-beam", "--out", "loop", "--json",
+                  "--no-progress", timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    work = installed[2]
+    assert (work / "loop" / "report.md").is_file() and (work / "loop" / "loop.json").is_file()
+    assert json.loads((work / "loop" / "loop.json").read_text()) == json.loads(run.stdout)
 
 
 PINS = ROOT / "constraints.txt"

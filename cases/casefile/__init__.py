@@ -1,3 +1,3 @@
-"""Case files (``shared/spec/case-file.md``): any jointed beam assembly described in TOML,
+"""Case files (``docs/formats/case-file.md``): any jointed beam assembly described in TOML,
 read (:mod:`.schema`), calibrated (:mod:`.calibrate`), built (:mod:`.build`), summarized
 (:mod:`.summary`) and given a nonlinear model (:mod:`.nonlinear`)."""

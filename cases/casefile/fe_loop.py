@@ -110,6 +110,26 @@ def _defaults(cf, data_path=None, mode=None) -> dict:
             "fit_levels": ",".join(map(str, fit))}
 
 
+def _nominal_joint_note(cf) -> str:
+    """What the file says of its joints beside what update fits: the nominal joint of
+    modes and backbone where chi, fs and beta are given, 'left to be fitted' where one is
+    not (the case-file spec allows either)."""
+    parts = []
+    for k, i in enumerate(cf.interfaces):
+        if i.tangential != "joint":
+            continue
+        given = {"chi": i.chi, "fs": i.fs, "beta": i.beta}
+        missing = [name for name, v in given.items() if v is None]
+        if missing:
+            parts.append(f"[interface.{k}] {', '.join(missing)} left to be fitted")
+        else:
+            parts.append(f"[interface.{k}] chi = {i.chi:g}, fs = {i.fs:g} N, beta = "
+                         f"{i.beta:g} (nominal joint of modes and backbone)")
+    return (f"the file's joints: {'; '.join(parts)}; update fits chi and the joint strength "
+            f"to the measured levels (beta: the ln(phi_max/a_ref) row below; "
+            f"docs/case-file-loop.md)")
+
+
 def update_builder(cf):
     """``update(executor, progress, store, **settings)`` (fields of
     :class:`cases.fe_loop.update.UpdateSettings`; the defaults of the module docstring
@@ -124,12 +144,7 @@ def update_builder(cf):
         r = run_update(UpdateSettings(**settings), levels_builder(cf), executor=executor,
                        progress=progress, store=store, case_name=cf.name,
                        model_key=cf.path.read_text(), assumptions=variants)
-        joints = "; ".join(f"[interface.{k}] chi = {i.chi:g}, fs = {i.fs:g} N, beta = "
-                           f"{i.beta:g}" for k, i in enumerate(cf.interfaces)
-                           if i.tangential == "joint")
-        r["notes"] = [f"the file's joint ({joints}) is the nominal one of modes and backbone; "
-                      f"update fits chi and the joint strength to the measured levels (beta: "
-                      f"the ln(phi_max/a_ref) row below; docs/case-file-loop.md)"]
+        r["notes"] = [_nominal_joint_note(cf)]
         return r
     return update
 

@@ -1,6 +1,6 @@
 """The measured-data table of a case file's ``[measured] file``.
 
-A table (``shared/spec/measured-data.md``) is used as it is. FRF files of a series (one
+A table (``docs/formats/measured-data.md``) is used as it is. FRF files of a series (one
 per level) and a free-decay record are identified first, as ``iwanfe identify`` does
 (:func:`ident.series.load_series`: LSCF per level, or the free-decay Hilbert track), and
 the identified table is written once to the cache (``$XDG_CACHE_HOME/iwanfe/measured``,

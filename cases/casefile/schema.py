@@ -1,4 +1,4 @@
-"""A case file (``shared/spec/case-file.md``) read into dataclasses and checked.
+"""A case file (``docs/formats/case-file.md``) read into dataclasses and checked.
 
 :func:`read_case_file` parses the TOML (``tomllib``), reads every table through
 :class:`cases.casefile.tables.Table` (one-line errors naming file, table and key; unknown
@@ -22,6 +22,7 @@ from pathlib import Path
 from cases.casefile.spec import (Beam, Calibrate, CaseFile, Interface, Material, Measured,
                                  PointMass, Section, Support)
 from cases.casefile.tables import CaseFileError, Table
+from ident.units import FLAG, suspect
 
 TABLES = ("case", "material", "beam", "support", "interface", "mass", "drive", "sensor",
           "measured", "calibrate", "mesh", "damping")
@@ -70,6 +71,14 @@ class _Reader:
             elif default_sources and key in default_sources:
                 self.kinds[f"{t.label}.{key}"] = ("default", default_sources[key])
 
+    @staticmethod
+    def _plausible(t: Table, key: str, value: float, quantity: str):
+        """One line naming table and key when ``value`` looks like another unit
+        (:mod:`ident.units`)."""
+        why = suspect(quantity, value)
+        if why:
+            t.fail(key, f"{why} (if the value is right: iwanfe {FLAG} ...)")
+
     def close(self, t: Table):
         t.finish()
         if t.extra:
@@ -111,6 +120,8 @@ class _Reader:
             if m.name in {o.name for o in out}:
                 t.fail("name", f"material {m.name!r} defined twice")
             self.given(t, "E", "rho")
+            self._plausible(t, "E", m.E, "E")
+            self._plausible(t, "rho", m.rho, "rho")
             self.close(t)
             out.append(m)
         if not out:
@@ -132,6 +143,9 @@ class _Reader:
             z = t.number("z", required=False, default=0.0)
             self.given(t, "x", "width", "thickness", "z",
                        default_sources={"z": "spec: centroid height 0 when left out"})
+            self._plausible(t, "x", x[1] - x[0], "length")
+            self._plausible(t, "width", width, "section")
+            self._plausible(t, "thickness", thickness, "section")
             sections = []
             raw = t.raw("section", required=False) or []
             if not isinstance(raw, list):

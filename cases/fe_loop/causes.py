@@ -1,6 +1,6 @@
 """The causes of the diagnosis catalogue as FE physics of any jointed FE model.
 
-Each cause of ``shared/spec/diagnosis.md`` with a physical mechanism becomes one
+Each cause of ``docs/formats/diagnosis.md`` with a physical mechanism becomes one
 :class:`Extension` of the FE-levels model (:mod:`cases.fe_loop.levels`): one extra
 parameter (nested: its ``none`` value gives back the base model), a realization in the
 first-harmonic balance (:mod:`fe.hb_resonance`: an element, a per-level stiffness scale

@@ -234,6 +234,7 @@ def report(data, mask, s: dict, own: dict | None = None) -> dict:
         "unexplained": sel.unexplained, "closest_miss": sel.closest_miss,
         "ambiguous": sel.ambiguous, "rivals": sel.rivals,
         "untested": s["untested"], "estimator_start": s["estimator_start"],
+        "engagement": s["engagement"].to_json(), "engagement_text": s["engagement"].line(),
         "base_fit": base.fit.to_dict(), "extended_fit": f.to_dict(),
         "parameters": parameter_table(prob, f, profiles),
         "profiles": {n: p.to_dict() for n, p in profiles.items()},

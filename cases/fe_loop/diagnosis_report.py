@@ -63,6 +63,7 @@ def format_fe(fe: dict) -> list:
              f"  fit of {fe['candidate']}: rms {ft['rms_standardized']:.3g} noise sd, p = "
              f"{_g(ft['p_value'], '.2g')} ({ft['test']})",
              "  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),
+             *([f"  check: {fe['engagement_text']}"] if "engagement_text" in fe else []),
              *_own_scatter_lines(fe),
              f"  cross-validated: base error {_g(fe['base_error'])}, extended "
              f"{_g(fe['extended_error'])}, gain {_g(fe['gain'])}",

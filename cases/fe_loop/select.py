@@ -32,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cases.fe_loop.causes import EXTENSIONS, Combined
-from cases.fe_loop.levels import BASE_PARAMETERS, FELevels, Simulator
+from cases.fe_loop.engagement import check_engagement, engagement
+from cases.fe_loop.levels import BASE_PARAMETERS, KT_GRID, FELevels, Simulator
 from inverse import judge
 from inverse.fe_selection import FitCandidate, judge_extensions
 from inverse.estimate import estimate
@@ -224,10 +225,14 @@ def fe_select(data, mask, fe: FELevels, causes=None,
     :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason),
     ``chosen`` (name of the selected candidate: the closest one when unexplained) and
     ``estimator_start`` ("used", or why the paper's estimator gave no start:
-    :func:`estimator_start`)."""
+    :func:`estimator_start`) and ``engagement`` (:mod:`cases.fe_loop.engagement`:
+    checked first; data that move the mode more than its joints can are one line, exit
+    2, never a fit)."""
+    _, noise = fe_noise(data, cap)
+    engaged = check_engagement(engagement(data, fe, noise, 10.0 ** max(KT_GRID)))
     try:
-        return _select(data, mask, fe, causes,
-                       progress or (lambda s: None), cap)
+        return {**_select(data, mask, fe, causes, progress or (lambda s: None), cap),
+                "engagement": engaged}
     except ValueError as exc:          # the input was checked before: ours, not the user's
         raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
 

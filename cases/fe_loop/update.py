@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cases.fe_loop.causes import MacroSlip
-from cases.fe_loop.levels import BASE_PARAMETERS, abscissa_of
+from cases.fe_loop.levels import BASE_PARAMETERS, KT_GRID, abscissa_of
 from cases.fe_loop.select import chosen_model, fe_select
 from ident.measured import read_measured
 from inverse.estimate import parse_levels
@@ -51,7 +51,6 @@ __all__ = ["UpdateSettings", "load_levels", "problem_digest", "run_update"]
 
 #: Parameters ``update`` may fit: the base ones and those of the FE causes.
 UPDATED_PARAMETERS = BASE_PARAMETERS + ("ln_phimax", "drag_cd", "k3", "drift", "inv_e_sat")
-KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 1.0), 6))
 
 
 @dataclass(frozen=True)

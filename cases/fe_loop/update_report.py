@@ -38,7 +38,7 @@ def _fmt(v, digits=6):
 
 
 def _tie_statement(data, mask) -> dict:
-    """The Iwan tie against the data over the fit levels (shared/spec/diagnosis.md)."""
+    """The Iwan tie against the data over the fit levels (docs/formats/diagnosis.md)."""
     i = np.flatnonzero(mask)
     a, b = i[0], i[-1]
     d_om2 = float(data.omega2[a] - data.omega2[b])
@@ -172,6 +172,8 @@ def summary(r: dict) -> dict:
             "noise": r["noise"].to_dict(), "fit": best.to_dict(), "parameters": params,
             "derived": derived, "levels": levels, "misfit": statements,
             "notes": list(r.get("notes", [])),
+            "engagement": r["selection"]["engagement"].to_json(),
+            "engagement_text": r["selection"]["engagement"].line(),
             "tie": _tie_statement(data, mask), "base_chi2": base.chi2,
             "cause": sel.cause, "also": sel.also, "model": r["candidate"],
             "unexplained": sel.unexplained, "fit_test": test.to_json(),
@@ -198,6 +200,7 @@ def format_text(s: dict) -> str:
              f"judge, as diagnose --case; fit test p = {_fmt(ft['p_value'], 2)}, {ft['test']})",
              f"noise: sigma_omega2 = {n['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = "
              f"{n['sigma_zeta'][0]:.3g} ({n['source']})",
+             f"check: {s['engagement_text']}",
              *(f"note: {t}" for t in s.get("notes", [])),
              f"{'parameter':26s} {'value':>14s}  {int(100 * s['confidence'])}% profile interval"
              f"          status / kind"]

@@ -1,7 +1,7 @@
 """``iwanfe diagnose``: what the Iwan modal model gets wrong, the cause(s), and the gain.
 
-Reads a measured-data CSV (``shared/spec/measured-data.md``) and runs
-:func:`inverse.diagnose.diagnose` (``shared/spec/diagnosis.md`` v2): the base model
+Reads a measured-data CSV (``docs/formats/measured-data.md``) and runs
+:func:`inverse.diagnose.diagnose` (``docs/formats/diagnosis.md`` v2): the base model
 (one micro-slip Iwan joint), each cause of the catalogue and every pair, weighed by
 AIC against the noise of the data; contradictions stated with numbers; ``none`` /
 a cause (+ ``also``) / ``unexplained``; errors on held-out levels.

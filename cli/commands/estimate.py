@@ -1,6 +1,6 @@
 """``iwanfe estimate``: Iwan chi and R from the growth of damping between levels.
 
-Reads a measured-data CSV (``shared/spec/measured-data.md``) or the FRF files of a
+Reads a measured-data CSV (``docs/formats/measured-data.md``) or the FRF files of a
 series (one per level, identified first: :mod:`cli.series_options`), fits chi and
 ``|kappa1| B`` to the successive damping differences of the chosen levels (paper eq.
 33-35 with the factor 2 of eq. 45 restored), predicts frequency and damping at every

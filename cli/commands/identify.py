@@ -7,7 +7,7 @@ under which ``# control`` (force or response) and when (``# run_order``); the co
 line overrides the files. Levels are numbered by increasing held level, the levels
 agree on the number of modes in the band, modes are followed from level to level by
 frequency and MAC, and every mode carries its fit warnings (fit error, stability, band
-sensitivity). ``--out`` writes the measured-data CSV (``shared/spec/measured-data.md``)
+sensitivity). ``--out`` writes the measured-data CSV (``docs/formats/measured-data.md``)
 that ``iwanfe estimate`` and ``iwanfe diagnose`` read.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The one-mode diagnosis (``shared/spec/diagnosis.md`` v2): :func:`diagnose`.
+"""The one-mode diagnosis (``docs/formats/diagnosis.md`` v2): :func:`diagnose`.
 
 Modules: ``causes/`` (the catalogue, one file per cause), ``models`` (the base model and
 the design of any set of causes), ``fit`` (batched least squares), ``cv`` (held-out

@@ -1,4 +1,4 @@
-"""The JSON object of a diagnosis (``shared/spec/diagnosis.md`` v2), from the pieces
+"""The JSON object of a diagnosis (``docs/formats/diagnosis.md`` v2), from the pieces
 :func:`inverse.diagnose.diagnose` computed.
 
 Keys: ``cause``, ``also``, ``alternatives`` (each with ``gain_untestable``: why no

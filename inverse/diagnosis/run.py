@@ -1,5 +1,5 @@
 """Model-form diagnosis: what the Iwan modal model gets wrong, why, and the gain
-(``shared/spec/diagnosis.md``, v2).
+(``docs/formats/diagnosis.md``, v2).
 
 Candidates: the base model (``none``), each testable cause of the catalogue
 (:mod:`inverse.diagnosis.causes`) alone and every pair, fitted by weighted least

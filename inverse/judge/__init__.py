@@ -1,6 +1,6 @@
 """The one judge of a fit: the noise model, the fit test and the model-selection rule
 shared by every command that judges a fit (``diagnose``, ``diagnose --case``, ``update``;
-``shared/spec/diagnosis.md``, "Noise has two parts").
+``docs/formats/diagnosis.md``, "Noise has two parts").
 
 Noise model (:func:`noise_model`), per channel (``omega2``, ``zeta``; any other channel,
 e.g. the log response amplitude, the same way on an absolute scale):
