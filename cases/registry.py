@@ -34,14 +34,16 @@ CASES = ("double-beam",)
 MEASURED_DATA = {"double-beam": DATA_FILE}
 
 
-def resolve_case(name_or_file: str):
-    """The :class:`cases.case.Case` of a shipped name or of a case file path."""
+def resolve_case(name_or_file: str, model=None):
+    """The :class:`cases.case.Case` of a shipped name or of a case file path; ``model``:
+    an ``updated_model.json`` of ``iwanfe update`` on that case, whose fitted model the
+    case then is (case files and the shipped case files; not the lumped case)."""
     key = str(name_or_file)
     if key in CASE_FILES:
         from cases.casefile.case import case_from_file
 
-        case = case_from_file(CASE_FILES[key])
-        if key == "double-beam":   # its joints: chi, R~ estimated from its measured levels
+        case = case_from_file(CASE_FILES[key], model=model)
+        if key == "double-beam" and model is None:   # its joints: chi, R~ from its levels
             from cases.nonlinear_case import build_nonlinear_case
 
             case.builders["nonlinear_model"] = lambda mode=None: build_nonlinear_case(
@@ -53,11 +55,13 @@ def resolve_case(name_or_file: str):
             case.builders["uncertainty"] = _double_beam_uncertainty
         return case
     if key == "lumped":
+        if model is not None:
+            raise InputError("case 'lumped' has no FE model to update (--model)")
         return _lumped_case()
     if key.endswith(".toml") or Path(key).is_file():
         from cases.casefile.case import case_from_file
 
-        return case_from_file(key)
+        return case_from_file(key, model=model)
     raise InputError(f"unknown case {key!r}: give a shipped name ({', '.join(SHIPPED)}) "
                      f"or a case file (.toml)")
 

@@ -21,16 +21,17 @@ __all__ = ["ringdown_report"]
 
 
 def ringdown_report(case_name, settings, out: Path, window, response_levels,
-                    progress=True) -> dict:
+                    progress=True, model=None) -> dict:
     """Simulate, identify, compare and write the files (module docstring) for the case
     ``case_name`` and :class:`cases.ringdown_study.RingdownSettings` ``settings``;
     ``window`` (lo, hi) fractions of the start amplitude; ``response_levels`` held
-    amplitudes of the virtual test (0: none). Returns the report dict."""
+    amplitudes of the virtual test (0: none); ``model``: an ``updated_model.json`` of
+    the case (:mod:`cases.casefile.updated`). Returns the report dict."""
     from cases.ringdown_routes import compare_ringdown, identify_record
     from cases.ringdown_study import RECORD_FILE, ringdown_case, simulate_ringdown
 
     t0 = time.perf_counter()
-    case = ringdown_case(case_name, settings.mode)
+    case = ringdown_case(case_name, settings.mode, model)
     bar = None
     if progress:
         from tqdm import tqdm

@@ -60,13 +60,13 @@ class RingdownSettings:
             raise ValueError(f"--start must be one of {', '.join(STARTS)}, got {self.start!r}")
 
 
-def ringdown_case(name: str, mode: int):
-    """The jointed model of case ``name`` (a shipped name or a case file) studying
-    ``mode``: the one place this command gets a case (its ``nonlinear_model``
-    capability, :mod:`cases.case`)."""
+def ringdown_case(name: str, mode: int, model=None):
+    """The jointed model of case ``name`` (a shipped name or a case file; ``model``: an
+    ``updated_model.json`` of it) studying ``mode``: the one place this command gets a
+    case (its ``nonlinear_model`` capability, :mod:`cases.case`)."""
     from cases.registry import resolve_case
 
-    return resolve_case(name).nonlinear_model(mode=mode)
+    return resolve_case(name, model=model).nonlinear_model(mode=mode)
 
 
 def settings_hash(case, settings: RingdownSettings) -> str:

@@ -31,15 +31,13 @@ amplitude, so ``response_amplitude`` is required and must increase with ``level`
 ``excitation`` (force needed at resonance) need not increase. Under force control the
 excitation must increase with ``level``.
 
-A ``zeta`` median above 0.2 is taken for percent: one line, exit status 2, unless the run
-is started with ``iwanfe --units-confirmed`` (:mod:`ident.units`; then a warning).
+A ``zeta`` median above 0.2 is percent: one line, exit 2, unless ``iwanfe
+--units-confirmed`` (:mod:`ident.units`; then a warning). Warnings (kept in
+:attr:`MeasuredData.warnings`): per mode, ratios of the held amplitude between
+successive levels that differ from their median by more than 5 %, and every non-empty
+``x_warning`` annotation (:func:`ident.modal_data.annotation_warnings`).
 
-Warnings (kept in :attr:`MeasuredData.warnings`): per mode, ratios of the held amplitude between successive levels that differ from
-their median by more than 5 %, and every non-empty ``x_warning`` annotation (the
-identification's warnings, :func:`ident.modal_data.annotation_warnings`).
-
-``python -m ident.measured FILE`` validates a file: a summary and the warnings, or one
-error line on stderr with exit status 2.
+``python -m ident.measured FILE``: a summary and the warnings, or one error line, exit 2.
 """
 from __future__ import annotations
 
@@ -299,24 +297,20 @@ def read_measured(path) -> MeasuredData:
             warnings.append(
                 f"{source}: mode {m}: {name} ratios between successive levels are not "
                 f"constant ({ratio.min():.3g} to {ratio.max():.3g}, median {median:.3g})")
-    if np.median(zeta) > PERCENT_ZETA_MEDIAN:
-        # percent is the likely unit: one line (exit 2) unless confirmed (ident.units)
+    if np.median(zeta) > PERCENT_ZETA_MEDIAN:       # percent? (ident.units)
         refuse(f"{source}: zeta median", "zeta", float(np.median(zeta)))
         warnings.insert(0, f"{source}: zeta median {np.median(zeta):.3g} > "
-                        f"{PERCENT_ZETA_MEDIAN}: is zeta in percent? it must be a fraction "
-                        f"(confirmed by {FLAG})")
+                        f"{PERCENT_ZETA_MEDIAN}: is zeta in percent? ({FLAG} given)")
 
     extra = {}
-    for name in header:
-        if name.startswith("x_"):
-            texts = [f[col[name]] for _, f in rows]
-            try:
-                extra[name] = np.array([float(t) for t in texts])
-            except ValueError:
-                extra[name] = np.array(texts, dtype=str)
-
-    if "x_warning" in extra:
-        extra["x_warning"] = np.array([f[col["x_warning"]] for _, f in rows], dtype=str)
+    for name in (h for h in header if h.startswith("x_")):
+        texts = [f[col[name]] for _, f in rows]
+        try:                         # numbers where every entry is one (not x_warning)
+            if name == "x_warning":
+                raise ValueError
+            extra[name] = np.array([float(t) for t in texts])
+        except ValueError:
+            extra[name] = np.array(texts, dtype=str)
     data = MeasuredData(level=level, excitation=excitation, omega2=omega2, zeta=zeta,
                         mode=mode, run_order=run_order, response_amplitude=response,
                         omega2_std=omega2_std, zeta_std=zeta_std, control=control,

@@ -17,9 +17,15 @@ from cases.casefile.schema import read_case_file
 from cases.casefile.summary import case_summary
 
 
-def case_from_file(path) -> Case:
-    """Read and check the case file at ``path`` (CaseFileError on a fault)."""
+def case_from_file(path, model=None) -> Case:
+    """Read and check the case file at ``path`` (CaseFileError on a fault); ``model``: an
+    ``updated_model.json`` of ``iwanfe update`` whose fitted joints and structure replace
+    the file's (:func:`cases.casefile.updated.updated_file`)."""
     cf = read_case_file(Path(path))
+    if model is not None:
+        from cases.casefile.updated import updated_file
+
+        cf = updated_file(cf, model)
 
     def file_at(element_size=None, calibrated=True):
         f = cf if element_size is None else dataclasses.replace(

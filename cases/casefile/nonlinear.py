@@ -41,6 +41,14 @@ def joint_parameters(cf) -> list[IwanParameters]:
     return out
 
 
+def _joint_source(cf) -> str:
+    """Where the joint parameters come from: the file, or the update that fitted them
+    (:mod:`cases.casefile.updated` marks them ``fitted``)."""
+    fitted = {src for key, (kind, src) in cf.kinds.items()
+              if key.startswith("interface.") and key.endswith(".chi") and kind == "fitted"}
+    return f"fitted {sorted(fitted)[0]}" if fitted else f"given in {cf.path.name}"
+
+
 def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
     """The case file's jointed model; InputError naming what is missing."""
     missing = missing_joint_parameters(cf)
@@ -74,6 +82,6 @@ def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
         chi=float(itfs[0].chi), R=float(sum(p.R for p in params)), phi_max=float(phi.max()),
         force=DEFAULT_FORCES.copy(), lines_hz=np.linspace(0.9 * f, 1.1 * f, 81),
         band_hz=(0.9 * f, 1.1 * f),
-        joint_source=f"given in {cf.path.name}: " + "; ".join(
+        joint_source=_joint_source(cf) + ": " + "; ".join(
             f"chi = {i.chi:g}, kt = {i.kt:g} N/m, fs = {i.fs:g} N, beta = {i.beta:g}"
             for i in itfs))

@@ -10,7 +10,7 @@ stiffness and 0 (every slider of an Iwan joint, a Jenkins and a Bouc-Wen element
 full macro-slip), so the mode's omega^2 lies between its stuck value and its value with
 every joint fully slipped; the loss over any series is at most
 ``loss_model = 1 - omega2_slipped / omega2_stuck``
-(:meth:`cases.fe_loop.levels.LinearPart.slipped_omega2_ratio`: the mode followed by its
+(:func:`slipped_omega2_ratio`: the mode followed by its
 shape, the slipped eigenvector with the largest share of the stuck one).
 
 The data's loss ``(max omega2 - min omega2) / max omega2`` over all levels (measured)
@@ -36,9 +36,12 @@ import numpy as np
 from ident.errors import InputError
 from ident.units import FLAG, confirmed
 
-__all__ = ["Engagement", "engagement", "check_engagement", "check_frequency", "SIGMAS",
+__all__ = ["KT_GRID", "Engagement", "engagement", "slipped_omega2_ratio", "check_engagement", "check_frequency", "SIGMAS",
            "FREQUENCY_FACTOR", "UNIT_MATCH"]
 
+#: log10 K_T (N/m) values the update's K_T profile tries (``--profiles all``); the
+#: stiffest bounds what any joint can do to a mode.
+KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 1.0), 6))
 #: Standard deviations by which the data must exceed the bound to contradict it.
 SIGMAS = 3.0
 #: Factor between the data's and the model's frequency beyond which the data are taken
@@ -113,6 +116,17 @@ class Engagement:
         return {**asdict(self), "verdict": self.verdict, "sigmas": SIGMAS}
 
 
+def slipped_omega2_ratio(lin) -> float:
+    """omega^2 of the measured mode of :class:`cases.fe_loop.levels.LinearPart` ``lin``
+    with every joint fully slipped (no joint stiffness left) over its stuck omega^2: the
+    eigenvalue of the reduced ``K - G^T diag(K_T) G`` whose eigenvector has the largest
+    component on the mode's basis vector ``lin.k``."""
+    red = lin.red
+    K0 = red.K - red.G.T @ (red.K_T[:, None] * red.G)
+    w2, V = np.linalg.eigh(0.5 * (K0 + K0.T))
+    return float(w2[int(np.argmax(np.abs(V[lin.k])))] / lin.omega_k ** 2)
+
+
 def engagement(data, fe, noise, kt_stiffest: float | None = None) -> Engagement:
     """The :class:`Engagement` of the FE-levels model ``fe`` (at its case's K_T) with the
     measured levels ``data`` (``noise.sigma_omega2``: per level, rad^2/s^2);
@@ -124,12 +138,12 @@ def engagement(data, fe, noise, kt_stiffest: float | None = None) -> Engagement:
     sigma = np.broadcast_to(np.asarray(noise.sigma_omega2, float), omega2.shape)
     hi, lo = int(np.argmax(omega2)), int(np.argmin(omega2))
     e = Engagement(K_T=lin.K_T, fe_mode=lin.fe_mode,
-                   loss_model=1.0 - lin.slipped_omega2_ratio(),
+                   loss_model=1.0 - slipped_omega2_ratio(lin),
                    loss_data=float((omega2[hi] - omega2[lo]) / omega2[hi]),
                    loss_data_std=float(math.hypot(sigma[hi], sigma[lo]) / omega2[hi]))
     if e.verdict == "contradiction" and kt_stiffest and kt_stiffest > lin.K_T:
         stiff = fe.linear(kt_stiffest)
-        e = replace(e, loss_stiffest=1.0 - stiff.slipped_omega2_ratio(), K_T_stiffest=stiff.K_T)
+        e = replace(e, loss_stiffest=1.0 - slipped_omega2_ratio(stiff), K_T_stiffest=stiff.K_T)
     return e
 
 

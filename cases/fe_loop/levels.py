@@ -62,15 +62,12 @@ from inverse.iwan_modal import r_tilde
 from inverse.random_amplitude import rayleigh_nodes
 from joints.iwan import IwanParameters
 
-__all__ = ["BASE_PARAMETERS", "KT_GRID", "phi_max_of", "LinearPart", "LevelPrediction", "FELevels",
+__all__ = ["BASE_PARAMETERS", "phi_max_of", "LinearPart", "LevelPrediction", "FELevels",
            "Simulator", "level_entries", "abscissa_of", "rayleigh_expectation"]
 
 #: The base model's parameters, in the order the fits use.
 BASE_PARAMETERS = ("chi", "ln_dc1", "zeta_v", "f0_hz")
 N_MODES = 40
-#: log10 K_T (N/m) values the update's K_T profile tries (``--profiles all``); the
-#: stiffest bounds what any joint can do to a mode (:mod:`cases.fe_loop.engagement`).
-KT_GRID = tuple(np.round(np.arange(6.0, 11.01, 1.0), 6))
 #: How a level is simulated (class docstring).
 ABSCISSAE = ("force", "response", "random")
 #: Gauss-Laguerre nodes of a random level's Rayleigh expectation (1e-3 relative on the
@@ -127,16 +124,6 @@ class LinearPart:
     def a_ref(self) -> float:
         """Largest level-1 linear-inverse joint slip (m): the unit of ``ln_phimax``."""
         return float(self.slips1.max())
-
-    def slipped_omega2_ratio(self) -> float:
-        """omega^2 of the measured mode with every joint fully slipped (no joint
-        stiffness left) over its stuck omega^2: the eigenvalue of the reduced
-        ``K - G^T diag(K_T) G`` whose eigenvector has the largest component on basis
-        vector ``k`` (:mod:`cases.fe_loop.engagement`)."""
-        red = self.red
-        K0 = red.K - red.G.T @ (red.K_T[:, None] * red.G)
-        w2, V = np.linalg.eigh(0.5 * (K0 + K0.T))
-        return float(w2[int(np.argmax(np.abs(V[self.k])))] / self.omega_k ** 2)
 
     def B(self, chi: float) -> float:
         """B~ (paper eq. 37) at the level-1 linear-inverse slips (m^(chi+1)/kg)."""
@@ -349,8 +336,8 @@ class FELevels:
                                    enumerate(fallbacks[i:i + n]) if w)
                          for i in range(0, len(fallbacks), n)]
         joint = {k: v for k, v in j.items() if k not in ("params", "linear")}
-        joint["grip"] = lin.grip
-        joint["structure"] = self.structure(lin)
+        joint.update(grip=lin.grip, structure=self.structure(lin), fe_mode=lin.fe_mode,
+                     stiffness_scale=(2 * math.pi * float(p["f0_hz"]) / lin.omega_k) ** 2)
         return LevelPrediction(omega2=omega2, zeta=zeta, slip_over_phi_max=slip / j["phi_max"],
                                joint=joint, modal_amplitude=modal, fallbacks=fallbacks)
 

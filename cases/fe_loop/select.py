@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cases.fe_loop.causes import EXTENSIONS, Combined
-from cases.fe_loop.engagement import check_engagement, engagement
-from cases.fe_loop.levels import BASE_PARAMETERS, KT_GRID, FELevels, Simulator
+from cases.fe_loop.engagement import KT_GRID, check_engagement, engagement
+from cases.fe_loop.levels import BASE_PARAMETERS, FELevels, Simulator
 from inverse import judge
 from inverse.fe_selection import FitCandidate, judge_extensions
 from inverse.estimate import estimate

@@ -40,7 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cases.fe_loop.causes import MacroSlip
-from cases.fe_loop.levels import BASE_PARAMETERS, KT_GRID, abscissa_of
+from cases.fe_loop.engagement import KT_GRID
+from cases.fe_loop.levels import BASE_PARAMETERS, abscissa_of
 from cases.fe_loop.select import chosen_model, fe_select
 from ident.measured import read_measured
 from inverse.estimate import parse_levels

@@ -125,7 +125,8 @@ def summary(r: dict) -> dict:
     j = pred.joint
     derived = {"R_tilde": j["R"], "phi_max_m": j["phi_max"], "F_S_N": j["F_S"],
                "beta": j["beta"], "K_T_N_per_m": j["K_T"], "grip_m": j["grip"],
-               "structure": j["structure"],
+               "structure": j["structure"], "fe_mode": j["fe_mode"],
+               "stiffness_scale": j["stiffness_scale"], "zeta_v": best.values["zeta_v"],
                "kappa1_B_level1": math.exp(best.values["ln_dc1"]),
                "kappa2_over_kappa1": kappa_ratio(best.values["chi"], "exact"),
                "force_scale_N_per_unit": r["settings"].force_scale}

@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from cli import validate
+from cli.model_options import add_model_argument, case_of
 
-from cases.registry import SHIPPED, resolve_case
+from cases.registry import SHIPPED
 from runs.jsonio import print_json
 
 NAME = "backbone"
@@ -47,6 +48,7 @@ def register(subparsers) -> None:
                              "every joint parameter given")
     parser.add_argument("--mode", type=int, default=None,
                         help="1-based stuck-joint mode (default: the case's studied mode)")
+    add_model_argument(parser)
     parser.add_argument("--path", choices=("exact", "bank"), default="exact",
                         help="joint path of the harmonic balance")
     parser.add_argument("--range", type=float, nargs=2, default=(1e-3, 3.0),
@@ -72,7 +74,7 @@ def run(args) -> int:
         validate.output_file(args.plot, "--plot", (".png",))   # cli.validate: one rule
     if args.mode is not None and args.mode < 1:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
-    case = resolve_case(args.case).nonlinear_model(mode=args.mode)
+    case = case_of(args).nonlinear_model(mode=args.mode)
     if args.compare:
         return _compare(case, args)
     from fe.epmc import epmc_backbone

@@ -6,7 +6,8 @@ Example::
 """
 from __future__ import annotations
 
-from cases.registry import DEFAULT_CASE, SHIPPED, case_modes, resolve_case
+from cli.model_options import add_model_argument, case_of
+from cases.registry import DEFAULT_CASE, SHIPPED, case_modes
 from cli import validate
 from runs.jsonio import print_json
 
@@ -30,6 +31,7 @@ def register(subparsers) -> None:
     p.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
                    help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml); "
                         f"default {DEFAULT_CASE}")
+    add_model_argument(p)
     p.add_argument("--out", required=True, metavar="FILE.vtu|FILE.xdmf",
                    help="file to write (its folder must exist)")
     p.add_argument("--modes", type=int, default=6, metavar="N",
@@ -47,7 +49,7 @@ def run(args) -> int:
     out = validate.output_file(args.out, "--out", EXPORT_SUFFIXES)
     if not 1 <= args.modes <= MAX_MODES:
         raise ValueError(f"--modes {args.modes}: must be in 1..{MAX_MODES}")
-    case = resolve_case(args.case)
+    case = case_of(args)
     model = case.fe_model()
     freqs, shapes = case_modes(model, args.modes)
     modes = [model.strip_displacements(shapes[:, k]) for k in range(shapes.shape[1])]

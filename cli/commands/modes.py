@@ -7,7 +7,8 @@ Example::
 from __future__ import annotations
 
 from cases.mode_report import mode_report
-from cases.registry import DEFAULT_CASE, SHIPPED, resolve_case
+from cli.model_options import add_model_argument, case_of
+from cases.registry import DEFAULT_CASE, SHIPPED
 from runs.jsonio import print_json
 
 
@@ -25,6 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
                    help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml); "
                         f"default {DEFAULT_CASE}")
+    add_model_argument(p)
     p.add_argument("--band", nargs=2, type=float, metavar=("LO", "HI"), default=None,
                    help="frequency band in Hz (default: 0 to 1000 Hz, or to 1.8 times the "
                         "case's measured frequency where that is higher, within what the "
@@ -40,7 +42,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    report = mode_report(resolve_case(args.case), band=args.band,
+    report = mode_report(case_of(args), band=args.band,
                          element_size=args.element_size, uncalibrated=args.uncalibrated)
     if args.json:  # a list of mode objects; the calibration statement is in the table
         print_json(report["modes"])

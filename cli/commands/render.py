@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import math
 
-from cases.registry import DEFAULT_CASE, SHIPPED, case_modes, resolve_case
+from cli.model_options import add_model_argument, case_of
+from cases.registry import DEFAULT_CASE, SHIPPED, case_modes
 from cli import validate
 from cli.commands.export import MAX_MODES
 from runs.jsonio import print_json
@@ -29,6 +30,7 @@ def register(subparsers) -> None:
     p.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
                    help=f"shipped case ({', '.join(SHIPPED)}) or case file (.toml); "
                         f"default {DEFAULT_CASE}")
+    add_model_argument(p)
     p.add_argument("--mode", type=int, required=True, metavar="N",
                    help=f"mode number, 1 = lowest frequency (1..{MAX_MODES})")
     p.add_argument("--out", required=True, metavar="FILE.png",
@@ -66,7 +68,7 @@ def run(args) -> int:
     _check_args(args)
     from viz.render import render_mode_shape
 
-    case = resolve_case(args.case)
+    case = case_of(args)
     model = case.fe_model()
     freqs, shapes = case_modes(model, args.mode)
     shape = shapes[:, args.mode - 1]

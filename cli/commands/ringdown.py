@@ -18,6 +18,7 @@ from pathlib import Path
 import math
 
 from cli import validate
+from cli.model_options import add_model_argument
 from runs.jsonio import print_json
 
 NAME = "ringdown"
@@ -40,6 +41,7 @@ def register(subparsers) -> None:
                         help="a shipped case or a case file (.toml) with every joint "
                              "parameter given")
     parser.add_argument("--mode", type=int, required=True, help="1-based stuck-joint mode")
+    add_model_argument(parser)
     parser.add_argument("--amplitude", type=float, default=0.5,
                         help="start: largest joint slip / its phi_max (the joint that "
                              "slips most in the mode)")
@@ -76,7 +78,7 @@ def run(args) -> int:
                               "--out")
     out.mkdir(parents=True, exist_ok=True)
     report = ringdown_report(args.case, settings, out, (lo, hi), args.response_levels,
-                             progress=not args.no_progress)
+                             progress=not args.no_progress, model=args.model)
     if args.json:
         print_json(report)
         return 0

@@ -1,0 +1,26 @@
+"""``--model FILE``: the FE commands on the model ``iwanfe update`` fitted
+(``DIR/updated_model.json``) instead of the case file's own values
+(:mod:`cases.casefile.updated`)::
+
+    add_model_argument(parser)
+    case = case_of(args)          # resolve_case(args.case, model=args.model)
+"""
+from __future__ import annotations
+
+__all__ = ["add_model_argument", "case_of"]
+
+
+def add_model_argument(parser) -> None:
+    """Add ``--model FILE``."""
+    parser.add_argument(
+        "--model", metavar="DIR/updated_model.json", default=None,
+        help="the model iwanfe update fitted on this case: its joints (chi, F_S, beta, "
+             "K_T), damping and stiffness scale replace the case file's (a case file that "
+             "leaves its joints to be fitted needs it for nonlinear commands)")
+
+
+def case_of(args):
+    """The case of ``args.case``, updated by ``args.model`` when given."""
+    from cases.registry import resolve_case
+
+    return resolve_case(args.case, model=getattr(args, "model", None))
