@@ -86,6 +86,9 @@ class Extension:
     #: whether the effect can raise the stiffness: then a level's frequency may pass
     #: the stuck-joint one and its damping ratio fall below the viscous one
     stiffens = False
+    #: the fitted value scales as ``s ** force_scale_power`` with the assumed force scale
+    #: ``s`` (N per excitation unit; omega^2 and zeta are invariant to it): 0 = it does not
+    force_scale_power = 0
 
     def step(self, fe, base, noise, top) -> float:
         """A parameter change that moves the top fit level by about one noise unit."""
@@ -155,6 +158,7 @@ class MacroSlip(Extension):
 class AirDrag(Extension):
     cause, parameter, unit = "quadratic-damping", "drag_cd", "1"
     description = "drag coefficient C_D of the strip pair (air, rho 1.204 kg/m^3)"
+    force_scale_power = -1        # zeta added ~ C_D x amplitude, amplitude ~ s
 
     @staticmethod
     def c2(p, lin):
@@ -181,6 +185,7 @@ class CubicHardening(Extension):
     cause, parameter, unit = "geometric-hardening", "k3", "1/(kg s^2 m^2)"
     description = "modal cubic stiffness k3 (mass-normalized mode)"
     stiffens = True
+    force_scale_power = -2        # omega^2 rise ~ k3 x amplitude^2, amplitude ~ s
 
     def step(self, fe, base, noise, top):
         a = float(base.modal_amplitude[top])
@@ -264,6 +269,13 @@ class Combined(Extension):
 
 EXTENSIONS = {e.cause: e for e in (MacroSlip(), AirDrag(), CubicHardening(), ThermalDrift(),
                                    ForceCompression())}
+
+
+def force_scale_power(parameter: str) -> int:
+    """How the fitted ``parameter`` scales with the assumed force scale s: s^power
+    (:attr:`Extension.force_scale_power`; 0 for the base parameters and any other)."""
+    return next((e.force_scale_power for e in EXTENSIONS.values()
+                 if e.parameter == parameter), 0)
 
 # every FE realization is a cause of the plug-in catalogue (inverse/diagnosis/causes/)
 _unknown = sorted(set(EXTENSIONS) - set(CATALOGUE))

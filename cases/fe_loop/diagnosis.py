@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 
+from cases.fe_loop.causes import force_scale_power
 from cases.fe_loop.levels import level_entries
 from cases.fe_loop.select import chosen_model, fe_select
 from inverse.fe_selection import held_out_errors, prediction_sd
@@ -55,9 +56,12 @@ def default_fit_mask(levels) -> np.ndarray:
     return mask
 
 
-def parameter_table(problem, f, profiles: dict | None = None) -> dict:
+def parameter_table(problem, f, profiles: dict | None = None,
+                    force_scale: float = 1.0) -> dict:
     """Every fitted parameter of fit ``f``: value, unit, ``at_bound`` (False or the
-    bound's side), interval and its kind (profile at a bound, covariance inside)."""
+    bound's side), interval and its kind (profile at a bound, covariance inside), and
+    ``rests_on`` where the value scales with the assumed ``force_scale`` (N per
+    excitation unit; :func:`cases.fe_loop.causes.force_scale_power`)."""
     out = {}
     for name in f.free:
         p = problem.parameters[name]
@@ -74,6 +78,9 @@ def parameter_table(problem, f, profiles: dict | None = None) -> dict:
                                                  f.values[name] + Z95 * se]
                          if math.isfinite(se) else [None, None],
                          interval_kind="linearized 95 % (misfit-scaled covariance)")
+        if force_scale_power(name):
+            entry["rests_on"] = (f"the force scale {force_scale:g} N per excitation unit "
+                                 f"(assumed): it scales as s^{force_scale_power(name)}")
         out[name] = entry
     return out
 
@@ -236,7 +243,7 @@ def report(data, mask, s: dict, own: dict | None = None) -> dict:
         "untested": s["untested"], "estimator_start": s["estimator_start"],
         "engagement": s["engagement"].to_json(), "engagement_text": s["engagement"].line(),
         "base_fit": base.fit.to_dict(), "extended_fit": f.to_dict(),
-        "parameters": parameter_table(prob, f, profiles),
+        "parameters": parameter_table(prob, f, profiles, fe.force_scale),
         "profiles": {n: p.to_dict() for n, p in profiles.items()},
         "evidence": judged["evidence"], "rule": "inverse.judge.select",
         "base_error": base_cv, "extended_error": ext_cv, "gain": ratio(base_cv, ext_cv),

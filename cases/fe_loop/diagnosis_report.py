@@ -97,7 +97,8 @@ def format_fe(fe: dict) -> list:
         value, lo, hi = fmt_interval(p["value"], *iv)     # the digits the interval supports
         lines.append(f"    {n:10s} {value} [{'n/a' if iv[0] is None else lo} .. "
                      f"{'n/a' if iv[1] is None else hi}] "
-                     f"({p['interval_kind']}{ab})")
+                     f"({p['interval_kind']}{ab}"
+                     + (f"; rests on {p['rests_on']}" if "rests_on" in p else "") + ")")
     if fe["reading"]:
         lines.append("  extended FE parameters: " + ", ".join(
             f"{k} = {v:.4g}" for k, v in fe["reading"].items()))

@@ -15,6 +15,7 @@ from statistics import NormalDist
 
 import numpy as np
 
+from cases.fe_loop.causes import force_scale_power
 from cases.fe_loop.diagnosis import unconverged_fits
 from cases.fe_loop.digits import fmt, fmt_interval
 from cases.fe_loop.levels import BASE_PARAMETERS, level_entries
@@ -121,6 +122,10 @@ def summary(r: dict) -> dict:
             entry["assumed_value"] = p.start
         if name == "ln_phimax" and value >= r["micro_limit"]:
             entry.update(value=r["micro_limit"], kind="at the micro-slip limit (beta = 0)")
+        power = force_scale_power(name)
+        if power:
+            entry["rests_on"] = (f"the force scale {r['settings'].force_scale:g} N per "
+                                 f"excitation unit (assumed): it scales as s^{power}")
         params[name] = entry
     j = pred.joint
     derived = {"R_tilde": j["R"], "phi_max_m": j["phi_max"], "F_S_N": j["F_S"],
@@ -213,8 +218,9 @@ def format_text(s: dict) -> str:
         ivs = f"{lo} .. {hi}" if iv else ""
         ab = f" / at {p['at_bound']} bound" if p.get("at_bound") else ""
         start = f" from {p['start']:.4g}" if "start" in p else ""
+        scale = f"; rests on {p['rests_on']}" if "rests_on" in p else ""
         lines.append(f"{_LABEL.get(name, name):26s} {value:>14s}  {ivs:28s} "
-                     f"{p.get('status', '')} / {p['kind']}{start}{ab}")
+                     f"{p.get('status', '')} / {p['kind']}{start}{ab}{scale}")
     d = s["derived"]
     lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
                  f"F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} "
