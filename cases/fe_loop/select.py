@@ -21,7 +21,7 @@ amplitude, a repeat run next to its level counting with it
 cannot be told from an amplitude effect);
 ``nonproportional-amplitude`` always (the FE fit compares omega^2 and zeta only: a force
 shortfall changes the abscissa of a law that chi already bends; it needs a response
-channel).
+channel); a cause of the catalogue without an FE realization, always, by name.
 """
 from __future__ import annotations
 
@@ -35,6 +35,7 @@ from cases.fe_loop.causes import EXTENSIONS, Combined
 from cases.fe_loop.engagement import KT_GRID, check_engagement, engagement
 from cases.fe_loop.levels import BASE_PARAMETERS, FELevels, Simulator
 from inverse import judge
+from inverse.diagnosis.causes import CATALOGUE
 from inverse.fe_selection import FitCandidate, judge_extensions
 from inverse.estimate import estimate
 from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Parameter,
@@ -140,10 +141,15 @@ def fe_noise(data, cap: bool = True):
                           dof=None if all(math.isinf(d) for d in dof) else int(min(dof)))
 
 
-def untestable(data) -> dict:
-    """Causes the data cannot test at the FE level, with the reason (module docstring)."""
-    out = {"nonproportional-amplitude": "the FE fit compares omega2 and zeta only; a force "
-                                        "shortfall needs a response channel"}
+def untestable(data, catalogue=None) -> dict:
+    """Causes the data cannot test at the FE level, with the reason (module docstring);
+    every cause of the ``catalogue`` (default: :data:`inverse.diagnosis.causes.CATALOGUE`)
+    without an FE realization (:data:`cases.fe_loop.causes.EXTENSIONS`) is listed as not
+    tested at the FE level, never skipped without a word."""
+    out = {c: "no FE realization (cases/fe_loop/causes.py): not tested at the FE level"
+           for c in (CATALOGUE if catalogue is None else catalogue) if c not in EXTENSIONS}
+    out["nonproportional-amplitude"] = ("the FE fit compares omega2 and zeta only; a force "
+                                        "shortfall needs a response channel")
     if not judge.time_separable(data.level, data.run_order, data.resonant_amplitude):
         out["thermal-drift"] = ("the levels were run in order of amplitude: a drift with "
                                 "time cannot be told from an amplitude effect")
