@@ -24,6 +24,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from cases.casefile.parameters import get_parameter, set_parameter
+from cases.casefile.plausibility import joint_plausibility
 from ident.errors import InputError
 
 __all__ = ["qualifies", "levels_builder", "assumption_variants", "update_builder",
@@ -145,6 +146,7 @@ def update_builder(cf):
                        progress=progress, store=store, case_name=cf.name,
                        model_key=cf.path.read_text(), assumptions=variants)
         r["notes"] = [_nominal_joint_note(cf)]
+        r["plausibility"] = joint_plausibility(cf, r["prediction"].joint)
         return r
     return update
 

@@ -180,6 +180,7 @@ def summary(r: dict) -> dict:
             "notes": list(r.get("notes", [])),
             "engagement": r["selection"]["engagement"].to_json(),
             "engagement_text": r["selection"]["engagement"].line(),
+            "plausibility": r.get("plausibility", []),
             "tie": _tie_statement(data, mask), "base_chi2": base.chi2,
             "cause": sel.cause, "also": sel.also, "model": r["candidate"],
             "unexplained": sel.unexplained, "fit_test": test.to_json(),
@@ -195,6 +196,12 @@ def summary(r: dict) -> dict:
             "timing_s": r["timing_s"]}
 
 
+def _plausibility_lines(checks: list) -> list:
+    """A line per check of :func:`cases.casefile.plausibility.joint_plausibility`."""
+    return [f"plausibility: {c['parameter']} = {c['value']:.4g}: {c['verdict']} (range "
+            f"{_fmt(c['low'], 3)} .. {_fmt(c['high'], 3)}: {c['source']})" for c in checks]
+
+
 def format_text(s: dict) -> str:
     """Readable summary (the command's default output)."""
     n = s["noise"]
@@ -207,6 +214,7 @@ def format_text(s: dict) -> str:
              f"noise: sigma_omega2 = {n['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = "
              f"{n['sigma_zeta'][0]:.3g} ({n['source']})",
              f"check: {s['engagement_text']}",
+             *_plausibility_lines(s.get("plausibility", [])),
              *(f"note: {t}" for t in s.get("notes", [])),
              f"{'parameter':26s} {'value':>14s}  {int(100 * s['confidence'])}% profile interval"
              f"          status / kind"]

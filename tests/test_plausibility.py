@@ -1,0 +1,48 @@
+"""Plausibility of a fitted joint (cases.casefile.plausibility) on the lap cantilever of
+docs/case-files.md. Truth: the interface's shear stiffness by hand (aluminium E 70 GPa,
+nu 0.3, overlap 60 x 30 mm, two 5 mm strips: G A / 5 mm) and the issue's absurd joint
+(phi_max 8.7e-14 m), which must read implausible."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from cases.casefile.plausibility import joint_plausibility
+from cases.casefile.schema import read_case_file
+
+LAP = Path(__file__).resolve().parents[1] / "docs" / "case-files" / "bolted-lap-cantilever.toml"
+
+
+def _checks(**joint):
+    out = joint_plausibility(read_case_file(LAP), {"phi_max": 3e-4, "K_T": 1e7, "F_S": 800.0,
+                                                   **joint})
+    return {c["parameter"]: c for c in out}
+
+
+def test_shear_stiffness_bound_is_the_hand_value():
+    k = 70e9 / (2 * 1.3) * (0.300 - 0.240) * 0.030 / 0.005
+    c = _checks()
+    assert c["K_T_N_per_m"]["high"] == pytest.approx(k, rel=1e-12)
+    assert c["phi_max_m"]["high"] == pytest.approx(0.1 * 0.060, rel=1e-12)
+    assert {v["verdict"] for v in c.values()} == {"plausible", "not checked"}
+
+
+@pytest.mark.parametrize("joint, parameter", [({"phi_max": 8.7e-14}, "phi_max_m"),
+                                              ({"phi_max": 0.02}, "phi_max_m"),
+                                              ({"K_T": 1e12}, "K_T_N_per_m")])
+def test_absurd_joints_are_implausible_with_their_range(joint, parameter):
+    c = _checks(**joint)[parameter]
+    assert c["verdict"] == "implausible" and c["source"]
+
+
+def test_update_reports_plausibility(tmp_path, capsys):
+    import json
+
+    from cli.main import main
+
+    assert main(["update", "--case", str(LAP), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    verdicts = {c["parameter"]: c["verdict"] for c in s["plausibility"]}
+    assert verdicts == {"phi_max_m": "plausible", "K_T_N_per_m": "plausible",
+                        "F_S_N": "not checked"}
