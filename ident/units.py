@@ -13,10 +13,12 @@ import os
 
 from ident.errors import InputError
 
-__all__ = ["ENVIRONMENT", "FLAG", "confirmed", "suspect", "LIMITS"]
+__all__ = ["ENVIRONMENT", "FLAG", "HINT", "confirmed", "suspect", "refuse", "LIMITS"]
 
 ENVIRONMENT = "IWANFE_UNITS_CONFIRMED"
 FLAG = "--units-confirmed"
+#: how each such line ends
+HINT = f"(if the value is right: iwanfe {FLAG} ...)"
 
 #: (lowest, highest) plausible value of each quantity, SI, and the unit a value beyond
 #: each end most likely is. Laboratory jointed structures: beams up to 20 m long, sections
@@ -53,4 +55,4 @@ def refuse(where: str, quantity: str, value: float) -> None:
     """Raise the one line of :func:`suspect` prefixed by ``where``, if any."""
     why = suspect(quantity, value)
     if why:
-        raise InputError(f"{where}: {why} (if the value is right: iwanfe {FLAG} ...)")
+        raise InputError(f"{where}: {why} {HINT}")

@@ -22,7 +22,7 @@ from pathlib import Path
 from cases.casefile.spec import (Beam, Calibrate, CaseFile, Interface, Material, Measured,
                                  PointMass, Section, Support)
 from cases.casefile.tables import CaseFileError, Table
-from ident.units import FLAG, suspect
+from ident.units import HINT, suspect
 
 TABLES = ("case", "material", "beam", "support", "interface", "mass", "drive", "sensor",
           "measured", "calibrate", "mesh", "damping")
@@ -77,7 +77,7 @@ class _Reader:
         (:mod:`ident.units`)."""
         why = suspect(quantity, value)
         if why:
-            t.fail(key, f"{why} (if the value is right: iwanfe {FLAG} ...)")
+            t.fail(key, f"{why} {HINT}")
 
     def close(self, t: Table):
         t.finish()

@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from ident.errors import InputError
-from ident.units import FLAG, confirmed
+from ident.units import HINT, confirmed
 
 __all__ = ["KT_GRID", "Engagement", "engagement", "slipped_omega2_ratio", "check_engagement", "check_frequency", "SIGMAS",
            "FREQUENCY_FACTOR", "UNIT_MATCH"]
@@ -75,8 +75,7 @@ def check_frequency(omega2, f_model_hz: float, fe_mode: int, modes_hz=()) -> Non
            f"{best[3]:.6g} Hz; omega2 must be (2 pi f)^2 in rad^2/s^2)" if best else
            "another unit, or a model far from the structure?")
     raise InputError(f"the data's omega2 = {top:.6g} rad^2/s^2 is {f_data:.4g} Hz, FE mode "
-                     f"{fe_mode} (the nearest) is at {f_model_hz:.4g} Hz: {why} (if the value "
-                     f"is right: iwanfe {FLAG} ...)")
+                     f"{fe_mode} (the nearest) is at {f_model_hz:.4g} Hz: {why} {HINT}")
 
 
 @dataclass(frozen=True)

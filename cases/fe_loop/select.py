@@ -234,17 +234,17 @@ def fe_select(data, mask, fe: FELevels, causes=None,
     :func:`estimator_start`) and ``engagement`` (:mod:`cases.fe_loop.engagement`:
     checked first; data that move the mode more than its joints can are one line, exit
     2, never a fit)."""
-    _, noise = fe_noise(data, cap)
+    jn, noise = fe_noise(data, cap)
     engaged = check_engagement(engagement(data, fe, noise, 10.0 ** max(KT_GRID)))
     try:
-        return {**_select(data, mask, fe, causes, progress or (lambda s: None), cap),
+        return {**_select(data, mask, fe, causes, progress or (lambda s: None), (jn, noise)),
                 "engagement": engaged}
     except ValueError as exc:          # the input was checked before: ours, not the user's
         raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
 
 
-def _select(data, mask, fe, causes, say, cap=True) -> dict:
-    jn, noise = fe_noise(data, cap)
+def _select(data, mask, fe, causes, say, noises) -> dict:
+    jn, noise = noises                       # fe_noise of the data, computed once
     estimated = estimator_start(data, [int(v) for v in data.level[mask]])
     P, starts = base_parameters(data, mask, fe, estimated)
     base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
