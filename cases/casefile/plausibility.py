@@ -37,9 +37,10 @@ def _shear_stiffness(cf, itf) -> float:
 
 def joint_plausibility(cf, joint: dict) -> list[dict]:
     """Checks of ``joint`` (``phi_max`` m, ``K_T`` N/m, ``F_S`` N: the joint of the
-    update's prediction, :class:`cases.fe_loop.levels.LevelPrediction`) against the file ``cf``: one dict per check with ``parameter``,
-    ``value``, ``low``, ``high`` (None: unbounded), ``source``, ``verdict``
-    (``plausible``, ``implausible`` or ``not checked``)."""
+    update's prediction, :class:`cases.fe_loop.levels.LevelPrediction`) against the file
+    ``cf``: one dict per check with ``parameter``, ``value``, ``kind`` (fitted, assumed),
+    ``low``, ``high`` (None: unbounded), ``source``, ``verdict`` (``plausible``,
+    ``implausible`` or ``not checked``)."""
     itfs = [i for i in cf.interfaces if i.tangential == "joint"]
     if not itfs:
         return []
@@ -47,18 +48,21 @@ def joint_plausibility(cf, joint: dict) -> list[dict]:
     k_shear = sum(_shear_stiffness(cf, i) for i in itfs)
     out = []
 
-    def check(name, value, low, high, source):
+    def check(name, value, kind, low, high, source):
         inside = (low is None or value >= low) and (high is None or value <= high)
-        out.append({"parameter": name, "value": value, "low": low, "high": high,
-                    "source": source, "verdict": "plausible" if inside else "implausible"})
+        out.append({"parameter": name, "value": value, "kind": kind, "low": low,
+                    "high": high, "source": source,
+                    "verdict": "plausible" if inside else "implausible"})
 
-    check("phi_max_m", float(joint["phi_max"]), PHI_MAX_FLOOR, PHI_MAX_SHARE * shortest,
+    check("phi_max_m", float(joint["phi_max"]), "fitted", PHI_MAX_FLOOR, PHI_MAX_SHARE * shortest,
           f"1 nm (below any machined roughness) to {PHI_MAX_SHARE:g} x the shortest joint "
           f"interface ({shortest:g} m)")
-    check("K_T_N_per_m", float(joint["K_T"]), None, k_shear,
+    check("K_T_N_per_m", float(joint["K_T"]), "assumed unless profiled",
+          None, k_shear,
           f"at most the interfaces' shear stiffness G A / mean half-thickness = "
           f"{k_shear:.3g} N/m (nu = {POISSON} assumed)")
-    out.append({"parameter": "F_S_N", "value": float(joint["F_S"]), "low": None,
+    out.append({"parameter": "F_S_N", "value": float(joint["F_S"]), "kind": "fitted",
+                "low": None,
                 "high": None, "source": "the case file gives no preload (friction x "
                 "preload would bound it)", "verdict": "not checked"})
     return out

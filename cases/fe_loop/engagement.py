@@ -36,7 +36,8 @@ import numpy as np
 from ident.errors import InputError
 from ident.units import HINT, confirmed
 
-__all__ = ["KT_GRID", "Engagement", "engagement", "slipped_omega2_ratio", "check_engagement", "check_frequency", "SIGMAS",
+__all__ = ["KT_GRID", "Engagement", "engagement", "slipped_omega2_ratio", "check_engagement",
+           "check_frequency", "SIGMAS",
            "FREQUENCY_FACTOR", "UNIT_MATCH"]
 
 #: log10 K_T (N/m) values the update's K_T profile tries (``--profiles all``); the
@@ -106,7 +107,8 @@ class Engagement:
 
     def line(self) -> str:
         """One line for reports, both numbers."""
-        return (f"engagement (FE mode {self.fe_mode}, K_T = {self.K_T:.3g} N/m): fully slipped "
+        return (f"engagement (FE mode {self.fe_mode}, K_T = {self.K_T:.3g} N/m, the case's, "
+                f"assumed): fully slipped "
                 f"joints lower omega^2 by at most {100 * self.loss_model:.3g} % (computed); the "
                 f"data by {100 * self.loss_data:.3g} +- {100 * self.loss_data_std:.2g} % "
                 f"(measured)")

@@ -198,7 +198,8 @@ def summary(r: dict) -> dict:
 
 def _plausibility_lines(checks: list) -> list:
     """A line per check of :func:`cases.casefile.plausibility.joint_plausibility`."""
-    return [f"plausibility: {c['parameter']} = {c['value']:.4g}: {c['verdict']} (range "
+    return [f"plausibility: {c['parameter']} = {c['value']:.4g} ({c['kind']}): "
+            f"{c['verdict']} (range "
             f"{_fmt(c['low'], 3)} .. {_fmt(c['high'], 3)}: {c['source']})" for c in checks]
 
 
