@@ -1,5 +1,5 @@
 """Paired benchmark of ``--amplitude-refit`` (:mod:`ident.amplitude_poles`): the same
-physical own-generator series (:mod:`cases.synthetic_series`, generated and sized with
+physical own-generator series (:mod:`synthetic`, generated and sized with
 the linear identification, the default) identified linearly and with the refit, each
 diagnosed on both noise paths. Prints the scores per identification and path, and the
 singles whose verdict changed.
@@ -23,9 +23,9 @@ from itertools import combinations  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
+from synthetic import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
                                     truth_of, without_stds)
-from cases.synthetic_series.measure import concat  # noqa: E402
+from synthetic.measure import concat  # noqa: E402
 from ident.frf_files import FRFSet  # noqa: E402
 from ident.series import identify_series  # noqa: E402
 from ident.series_table import series_table  # noqa: E402

@@ -6,7 +6,7 @@ Prints, as medians over repetitions (thread CPU time, wall clock in brackets):
   <= 1 s; and the command itself in a fresh interpreter (CPU and wall clock, the imports
   of every command's modules included: ``cli.main`` registers them all);
 * the 10-level FE campaign on the exact describing-function path
-  (:func:`cases.casefile.virtual_test.campaign`: phase resonance of mode 1 at 10 force
+  (:func:`cases.virtual_test.campaign`: phase resonance of mode 1 at 10 force
   levels); target <= 0.1 s; the nonlinear model's build (reduced basis) apart.
 
     .venv/bin/python benchmarks/bench_case_file.py
@@ -91,7 +91,7 @@ def _median(fn, repeat: int):
 
 
 def main() -> int:
-    from cases.casefile.virtual_test import campaign
+    from cases.virtual_test import campaign
     from cases.mode_report import mode_report
     from cases.registry import resolve_case
 

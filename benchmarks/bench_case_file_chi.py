@@ -1,12 +1,12 @@
 """chi recovered by the case-file FE update from tables simulated by another route.
 
-For each seed, :func:`cases.casefile.stepped_sine_test.simulate` makes the table of a
+For each seed, :func:`cases.stepped_sine_test.simulate` makes the table of a
 case file (Jenkins banks, multi-harmonic stepped sine, LSCF; a seeded chi), and the base
-FE-levels model (:class:`cases.casefile.levels.CaseLevels`, exact describing function at
+FE-levels model (:class:`feloop.case_levels.CaseLevels`, exact describing function at
 phase resonance) is fitted to levels 1-7 as ``update`` does. Prints the seeded and the
 fitted chi, their difference and whether the seeded one lies within the fit's
 linearized 95 % interval; and, as a control, the fit to phase-resonance data of the same
-joint (:func:`cases.casefile.virtual_test.simulated_table`: the fit's own route).
+joint (:func:`cases.virtual_test.simulated_table`: the fit's own route).
 
 ``python benchmarks/bench_case_file_chi.py [CASE.toml] [--seeds 20 21 22]``
 """
@@ -17,12 +17,12 @@ import dataclasses
 
 import numpy as np
 
-from cases.casefile.levels import CaseLevels
-from cases.casefile.nonlinear import nonlinear_case
-from cases.casefile.stepped_sine_test import SIGMA_OMEGA2, SIGMA_ZETA, simulate
-from cases.casefile.virtual_test import simulated_table
-from cases.fe_loop.levels import Simulator
-from cases.fe_loop.select import base_parameters, fe_noise, fit_base
+from feloop.case_levels import CaseLevels
+from casefile.nonlinear import nonlinear_case
+from cases.stepped_sine_test import SIGMA_OMEGA2, SIGMA_ZETA, simulate
+from cases.virtual_test import simulated_table
+from feloop.levels import Simulator
+from feloop.select import base_parameters, fe_noise, fit_base
 from cases.registry import resolve_case
 from inverse.update import NoiseModel, UpdateProblem
 

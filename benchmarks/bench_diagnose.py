@@ -4,7 +4,7 @@ Two generators, each on fresh seeds given on the command line, each scored on bo
 noise paths (the identified table with the ``omega2_std``/``zeta_std`` columns, and
 without them, as tables typed from a paper come):
 
-* ``own``: :mod:`cases.synthetic_series` (imports nothing from ``inverse``; its own
+* ``own``: :mod:`synthetic` (imports nothing from ``inverse``; its own
   mechanisms, sizes in noise units, repeatability, repeats; package doc). Per seed:
   8 ``none``, 3 per cause, the 10 pairs once, 2 per out-of-catalogue family.
 * ``gen_dev``: ``../shared/bench/gen_dev.py`` (a development set written outside the
@@ -46,7 +46,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
+from synthetic import (CATALOGUE, OUT_OF_CATALOGUE, generate_series,  # noqa: E402
                                     truth_of, without_stds)
 from inverse.diagnose import diagnose  # noqa: E402
 from inverse.judge.selection import shared_drop_dof  # noqa: E402

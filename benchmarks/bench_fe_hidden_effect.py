@@ -8,7 +8,7 @@ LSCF and adds repeatability noise (half the series with the identification's std
 columns, half without); the hidden mechanism is realized in forms the diagnosis does
 not fit (the generator's docstring tabulates both), with ``none`` and out-of-catalogue
 draws. The generator imports nothing from ``inverse/``. The diagnosis
-(:func:`cases.fe_loop.diagnosis.fe_diagnosis`, every level fitted, the held-out
+(:func:`feloop.diagnosis.fe_diagnosis`, every level fitted, the held-out
 gain leave-one-level-out) sees only the measured-data table.
 
 Scored per family: the answer (``none``, the cause, or ``unexplained`` for
@@ -42,7 +42,7 @@ SEED = 2101
 def run_draw(task) -> dict:
     from cases.double_beam.fe_levels import DoubleBeamLevels
     from cases.double_beam.fe_synthetic import draw_case
-    from cases.fe_loop.diagnosis import fe_diagnosis
+    from feloop.diagnosis import fe_diagnosis
     from ident.errors import InputError
     from inverse.update import InternalError
 

@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import fe_response_synth as synth  # noqa: E402
 
 from cases.double_beam.fe_levels import DoubleBeamLevels  # noqa: E402
-from cases.fe_loop.update import UpdateSettings, run_update  # noqa: E402
+from feloop.update import UpdateSettings, run_update  # noqa: E402
 from ident.measured import write_measured  # noqa: E402
 
 

@@ -20,7 +20,7 @@ campaign, and the cost of model updating, measured side by side in one run.
    levels is the bank's discretization plus the truncation to one harmonic, the top level
    (macro-slip) shows the truncation.
 
-2. **Model updating** (:func:`cases.fe_loop.update.run_update`, fit levels 1-7,
+2. **Model updating** (:func:`feloop.update.run_update`, fit levels 1-7,
    the defaults of ``iwanfe update --case double-beam``: the base model and every
    testable cause fitted and judged, the selected model's parameters on a bound
    profiled): wall time and CPU time (parent + workers) on a local process pool of 2
@@ -110,7 +110,7 @@ def campaign_benchmark(repeat: int) -> None:
 
 
 def update_benchmark() -> None:
-    from cases.fe_loop.update import UPDATED_PARAMETERS
+    from feloop.update import UPDATED_PARAMETERS
     from cases.registry import resolve_case
     from runs.executor import ExecutorSpec
 

@@ -1,14 +1,14 @@
 """The three performance targets of issue 20 in one run, printed as times and ratios:
 
 1. ``iwanfe update --case double-beam`` (the model choice by the one judge, the bound
-   profiles; :func:`cases.fe_loop.update.run_update` through the case's ``update``
+   profiles; :func:`feloop.update.run_update` through the case's ``update``
    capability): wall and CPU time (parent + workers) serially and on a pool of 2
    processes; target <= 10 s on 2 cores;
 2. a case file of 398 elements and 10 joints (``benchmarks/bench_case_file.py``'s bolted
    lap cantilever): ``modes`` in-process (read, check, build, modes in a band; target
    <= 1 s);
-3. its 10-level FE campaign: the virtual test (:func:`cases.casefile.virtual_test.
-   campaign`) and the FE-levels model of the loop (:meth:`cases.fe_loop.levels.FELevels.
+3. its 10-level FE campaign: the virtual test (:func:`cases.virtual_test.
+   campaign`) and the FE-levels model of the loop (:meth:`feloop.levels.FELevels.
    predict`, what ``update``, ``uncertainty`` and ``diagnose --case`` evaluate); target
    <= 0.1 s.
 
@@ -69,7 +69,7 @@ def update_benchmark() -> None:
 
 
 def case_file_benchmark(repeat: int) -> None:
-    from cases.casefile.virtual_test import campaign
+    from cases.virtual_test import campaign
     from cases.mode_report import mode_report
     from cases.registry import resolve_case
     from ident.modal_data import MeasuredData
@@ -94,7 +94,7 @@ def case_file_benchmark(repeat: int) -> None:
         data = MeasuredData(level=np.arange(1, 11), excitation=nc.force, omega2=res.omega2,
                             zeta=res.zeta, mode=np.ones(10, dtype=int),
                             run_order=np.arange(1, 11))
-        from cases.casefile.levels import CaseLevels
+        from feloop.case_levels import CaseLevels
 
         fe = CaseLevels.from_data(data, cf=case.file)
         lin = fe.linear(fe.default_kt)

@@ -1,7 +1,7 @@
 """How far the judge's noise is from the generator's, on the own-generator singles of a
 ``bench_diagnose.py`` run: named against missed.
 
-For every single-cause series of the own generator (:mod:`cases.synthetic_series`) in
+For every single-cause series of the own generator (:mod:`synthetic`) in
 ``bench_diagnose.json``, the series is generated again from its seed and diagnosed
 (with the std columns); the judge's total relative noise of omega^2
 (``noise.omega2.total_rel``, :func:`inverse.judge.noise_model`) is compared with the
@@ -30,7 +30,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from cases.synthetic_series import generate_series  # noqa: E402
+from synthetic import generate_series  # noqa: E402
 from inverse.diagnose import diagnose  # noqa: E402
 
 

@@ -101,7 +101,7 @@ def _rows(data, levels, run_orders):
 
 
 def own_oracle(data, truth) -> dict | None:
-    """``lam`` of a one-effect series of :mod:`cases.synthetic_series` (its truth's
+    """``lam`` of a one-effect series of :mod:`synthetic` (its truth's
     noise-free values with and without the mechanism; noise: the table's identification
     sd with the drawn repeatability). None for other series."""
     mechs = truth.get("mechanisms", [])

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.nonlinear_case import NonlinearCase
+from casefile.jointed import NonlinearCase
 from fe.epmc import epmc_backbone
 from ident.levels import identify_levels, spline_at
 from ident.modal_data import MeasuredData

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cases.backbone_routes import epmc_route, force_route, response_route
-from cases.nonlinear_case import NonlinearCase
+from casefile.jointed import NonlinearCase
 from fe.epmc import epmc_backbone, linear_mode
 from ident.modal_data import MeasuredData
 from inverse.estimate import estimate

@@ -44,7 +44,7 @@ def held_out_scores(data, mask, noise, prediction) -> dict:
 def run_loop(case, out, executor="serial", progress: bool = True) -> dict:
     """Run the loop on ``case`` (a :class:`cases.case.Case` with the ``update``
     capability) and write its files into ``out``; the summary dict."""
-    from cases.fe_loop.update_report import summary, write_update
+    from feloop.update_report import summary, write_update
 
     update = case.require("update")
     out = Path(out)

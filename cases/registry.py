@@ -3,7 +3,7 @@
 :func:`resolve_case` gives a :class:`cases.case.Case` for a shipped name
 (:data:`SHIPPED`: each a case file, or a Python case such as the lumped 10-DOF model) or
 for a path to a ``.toml`` case file; a case file with iwan4 joints and measured data
-gets the generic FE loop (:mod:`cases.casefile.fe_loop` on :mod:`cases.fe_loop`), the
+gets the generic FE loop (:mod:`feloop.case_file` on :mod:`feloop`), the
 double beam puts its Python FE-levels model in (``update``, ``fe_levels``) and adds its
 own ``fe_check`` and ``uncertainty`` (a stepped sine per sample). The older helpers
 below serve ``estimate --case``:
@@ -40,7 +40,7 @@ def resolve_case(name_or_file: str, model=None):
     case then is (case files and the shipped case files; not the lumped case)."""
     key = str(name_or_file)
     if key in CASE_FILES:
-        from cases.casefile.case import case_from_file
+        from cases.case_file import case_from_file
 
         case = case_from_file(CASE_FILES[key], model=model)
         if key == "double-beam" and model is None:   # its joints: chi, R~ from its levels
@@ -59,7 +59,7 @@ def resolve_case(name_or_file: str, model=None):
             raise InputError("case 'lumped' has no FE model to update (--model)")
         return _lumped_case()
     if key.endswith(".toml") or Path(key).is_file():
-        from cases.casefile.case import case_from_file
+        from cases.case_file import case_from_file
 
         return case_from_file(key, model=model)
     raise InputError(f"unknown case {key!r}: give a shipped name ({', '.join(SHIPPED)}) "
@@ -68,17 +68,17 @@ def resolve_case(name_or_file: str, model=None):
 
 def _double_beam_update(executor="serial", progress=False, store=None, **settings):
     """``run_update`` of the double beam's Python model on its shipped data, mode label 2,
-    fit levels 1-7 (``settings``: fields of :class:`cases.fe_loop.update.UpdateSettings`)."""
+    fit levels 1-7 (``settings``: fields of :class:`feloop.update.UpdateSettings`)."""
     from cases.double_beam.fe_levels import DoubleBeamLevels, assumption_variants
     from cases.double_beam.model import DoubleBeamConfig
     from cases.double_beam.settings import DEFAULT_DATA
-    from cases.fe_loop.update import UpdateSettings, run_update
+    from feloop.update import UpdateSettings, run_update
 
     settings = {"data_path": str(DEFAULT_DATA), "mode_label": 2, "fit_levels": "1-7",
                 **{k: v for k, v in settings.items() if v is not None}}
     variants = assumption_variants() if settings.get("assumptions") else None
-    from cases.casefile.plausibility import joint_plausibility
-    from cases.casefile.schema import read_case_file
+    from casefile.plausibility import joint_plausibility
+    from casefile.schema import read_case_file
 
     r = run_update(UpdateSettings(**settings), DoubleBeamLevels.from_data, executor=executor,
                    progress=progress, store=store, case_name="double-beam",

@@ -26,7 +26,7 @@ def ringdown_report(case_name, settings, out: Path, window, response_levels,
     ``case_name`` and :class:`cases.ringdown_study.RingdownSettings` ``settings``;
     ``window`` (lo, hi) fractions of the start amplitude; ``response_levels`` held
     amplitudes of the virtual test (0: none); ``model``: an ``updated_model.json`` of
-    the case (:mod:`cases.casefile.updated`). Returns the report dict."""
+    the case (:mod:`feloop.updated_model`). Returns the report dict."""
     from cases.ringdown_routes import compare_ringdown, identify_record
     from cases.ringdown_study import RECORD_FILE, ringdown_case, simulate_ringdown
 

@@ -1,6 +1,6 @@
 """``--model FILE``: the FE commands on the model ``iwanfe update`` fitted
 (``DIR/updated_model.json``) instead of the case file's own values
-(:mod:`cases.casefile.updated`)::
+(:mod:`feloop.updated_model`)::
 
     add_model_argument(parser)
     case = case_of(args)          # resolve_case(args.case, model=args.model)

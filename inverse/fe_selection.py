@@ -2,7 +2,7 @@
 
 Works on :class:`inverse.update.UpdateProblem` / :class:`inverse.update.Fit` pairs (any
 simulator, e.g. the FE double beam and its cause extensions,
-:mod:`cases.fe_loop.select`). Errors are root-mean-square residuals in noise
+:mod:`feloop.select`). Errors are root-mean-square residuals in noise
 units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
 
 * :func:`cross_validate`: leave-one-level-out over the interior fit levels (the lowest

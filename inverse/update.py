@@ -2,7 +2,7 @@
 
 The simulator is any callable ``simulate(values) -> (omega2, zeta)`` giving the natural
 frequency squared (rad^2/s^2) and damping ratio of one mode at every level of a test
-series (e.g. the nonlinear FE double beam, :mod:`cases.fe_loop.levels`); the
+series (e.g. the nonlinear FE double beam, :mod:`feloop.levels`); the
 parameters are named, bounded scalars (:class:`Parameter`). The fit is weighted least
 squares, i.e. Gaussian maximum likelihood with known noise levels
 (:class:`NoiseModel`)::
@@ -50,7 +50,7 @@ truncation, round-off amplified 1e3 times less), and that one decides.
 
 Noise: the :class:`NoiseModel` given to the problem, in the FE loop the totals of the one
 judge's noise model (:func:`inverse.judge.noise_model`, via
-:func:`cases.fe_loop.select.fe_noise`): the identification's stds plus the test's
+:func:`feloop.select.fe_noise`): the identification's stds plus the test's
 repeatability, the same noise as the one-mode diagnosis.
 """
 from __future__ import annotations

@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cases.casefile.build import build_model
-from cases.casefile.calibrate import calibrate
-from cases.casefile.schema import read_case_file
-from cases.casefile.tables import CaseFileError
+from casefile.build import build_model
+from casefile.calibrate import calibrate
+from casefile.schema import read_case_file
+from casefile.tables import CaseFileError
 from cases.registry import resolve_case
 from ident.errors import InputError
 
@@ -310,8 +310,8 @@ def test_two_parameter_calibration_recovers_a_planted_truth_on_a_fine_mesh(tmp_p
     0.0082 m / 0.0031 kg."""
     import dataclasses
 
-    from cases.casefile.calibrate import _bending_frequencies
-    from cases.casefile.parameters import set_parameter
+    from casefile.calibrate import _bending_frequencies
+    from casefile.parameters import set_parameter
 
     text = CLAMPED_LAP
     p = tmp_path / "lap.toml"
@@ -330,7 +330,7 @@ def test_air_drag_integral_counts_a_lap_once():
     """``lambda3 = int b |w|^3 dx`` over the projected area: on the lap cantilever (normal
     tied by a penalty, so both strips share ``w`` there to 1e-7) it is the two strips'
     integrals less the narrower strip's over the lap, evaluated here strip by strip."""
-    from cases.casefile.levels import _lambda3
+    from feloop.case_levels import _lambda3
 
     cf = read_case_file("docs/case-files/bolted-lap-cantilever.toml")
     model = build_model(cf).model

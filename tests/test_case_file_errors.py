@@ -6,8 +6,8 @@ import re
 
 import pytest
 
-from cases.casefile.schema import read_case_file
-from cases.casefile.tables import CaseFileError
+from casefile.schema import read_case_file
+from casefile.tables import CaseFileError
 from cli.main import main
 
 # without its [measured] table (the cases below add their own, in tmp directories)

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cases.casefile.build import build_model
-from cases.casefile.schema import read_case_file
-from cases.casefile.tables import CaseFileError
+from casefile.build import build_model
+from casefile.schema import read_case_file
+from casefile.tables import CaseFileError
 
 E, RHO, B, H, L = 70e9, 2700.0, 0.03, 0.005, 0.4
 LAP = (0.16, 0.24)

@@ -1,6 +1,6 @@
 """The FE loop on a case file written from the spec (docs/case-files/bolted-lap-cantilever.toml):
 its FE-levels model and the base-model update against a table simulated by another route
-(Jenkins banks, multi-harmonic stepped sine, LSCF; cases.casefile.stepped_sine_test,
+(Jenkins banks, multi-harmonic stepped sine, LSCF; cases.stepped_sine_test,
 seed 20: chi = -0.574, which the fit never sees)."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases.casefile.levels import CaseLevels
+from feloop.case_levels import CaseLevels
 from cases.registry import resolve_case
 from ident.measured import read_measured
 
@@ -42,8 +42,8 @@ def test_stuck_prediction_is_the_case_file_mode():
 
 
 def _fit(case, data, noise=None):
-    from cases.fe_loop.levels import Simulator
-    from cases.fe_loop.select import base_parameters, fe_noise, fit_base
+    from feloop.levels import Simulator
+    from feloop.select import base_parameters, fe_noise, fit_base
     from inverse.update import UpdateProblem
 
     fe = case.builders["fe_levels"](data)
@@ -66,13 +66,13 @@ def test_base_update_recovers_seeded_chi():
 
 
 def test_phase_resonance_table_of_the_case_file_joint_is_fitted_exactly():
-    """The case file's own nonlinear model (cases.casefile.nonlinear: Ritz basis, its
+    """The case file's own nonlinear model (casefile.nonlinear: Ritz basis, its
     damping) with the seeded chi at phase resonance: the FE-levels model (another
     reduced basis) gives chi and zeta_v back to 1e-6."""
     import dataclasses
 
-    from cases.casefile.nonlinear import nonlinear_case
-    from cases.casefile.virtual_test import simulated_table
+    from casefile.nonlinear import nonlinear_case
+    from cases.virtual_test import simulated_table
     from inverse.update import NoiseModel
 
     case, data, _ = _levels()

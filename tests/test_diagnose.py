@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import integrate, optimize
 
-from cases.synthetic_series import generate_series
+from synthetic import generate_series
 from cli.main import main
 from ident.measured import write_measured
 from ident.modal_data import MeasuredData
@@ -283,7 +283,7 @@ def test_four_levels_too_few_for_a_gain_are_judged_by_fit_test_and_ic():
 
 
 # Hidden causes in FRF-level series from the independent generator
-# (cases.synthetic_series) are scored by benchmarks/bench_diagnose.py on fresh seeds,
+# (synthetic) are scored by benchmarks/bench_diagnose.py on fresh seeds,
 # with the rates it prints, not by seed-picked cases here.
 
 

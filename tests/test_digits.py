@@ -1,7 +1,7 @@
-"""Printed values carry the digits their uncertainty supports (cases/fe_loop/digits.py)."""
+"""Printed values carry the digits their uncertainty supports (feloop/digits.py)."""
 from __future__ import annotations
 
-from cases.fe_loop.digits import decimals, fmt, fmt_interval
+from feloop.digits import decimals, fmt, fmt_interval
 
 
 def test_a_fitted_value_to_two_digits_of_its_standard_error():

@@ -1,4 +1,4 @@
-"""Engagement (cases.fe_loop.engagement): the largest loss of omega^2 the joints can
+"""Engagement (feloop.engagement): the largest loss of omega^2 the joints can
 give a mode, and the contradiction when the data lose more.
 
 Truth: the full FE model's eigen-solve with the joints' stiffness removed (a second
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 import scipy.linalg as sl
 
-from cases.fe_loop.engagement import engagement, slipped_omega2_ratio
-from cases.fe_loop.select import fe_noise
+from feloop.engagement import engagement, slipped_omega2_ratio
+from feloop.select import fe_noise
 from cases.registry import resolve_case
 from ident.measured import read_measured, write_measured
 
@@ -39,8 +39,8 @@ def test_reduced_bound_is_the_full_models_slipped_mode(name, mode):
     """The slipped omega^2 of the reduced model against the full FE model without its
     joints (dense generalized eigen-solve, the mode of largest mass-weighted MAC with
     the stuck mode): the loss agrees within 5e-4 relative (measured 4e-5, 2.6e-4)."""
-    from cases.casefile.build import build_model
-    from cases.casefile.calibrate import calibrate
+    from casefile.build import build_model
+    from casefile.calibrate import calibrate
 
     _, _, fe = _levels(name, mode)
     lin = fe.linear(fe.default_kt)

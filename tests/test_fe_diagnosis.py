@@ -1,4 +1,4 @@
-"""The FE-level diagnosis (cases/fe_loop/diagnosis.py) and the update command.
+"""The FE-level diagnosis (feloop/diagnosis.py) and the update command.
 
 Truth: virtual tests of the double beam made independently of the diagnosis
 (cases/double_beam/fe_synthetic.py: another glue discretization and K_T, Jenkins banks,
@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from cases.fe_loop.diagnosis import default_fit_mask
+from feloop.diagnosis import default_fit_mask
 from cases.double_beam.fe_levels import DoubleBeamLevels
 from cases.double_beam.fe_synthetic import draw_case
 from cli.main import main
@@ -57,7 +57,7 @@ def test_independent_hardening_plants_the_drawn_size():
 def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
     """An independent series (Jenkins-bank glue of another discretization and K_T,
     multi-harmonic stepped sine, repeatability noise) with nothing hidden: ``none``."""
-    from cases.fe_loop.diagnosis import fe_diagnosis
+    from feloop.diagnosis import fe_diagnosis
 
     case = draw_case(1, "none")
     r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
@@ -87,8 +87,8 @@ def test_a_damping_cycle_in_run_order_gets_a_second_verdict_at_the_fe_level():
     as the one-mode diagnosis gives it) the base FE model fits within it."""
     from dataclasses import replace
 
-    from cases.fe_loop.diagnosis import fe_diagnosis
-    from cases.fe_loop.diagnosis_report import format_fe
+    from feloop.diagnosis import fe_diagnosis
+    from feloop.diagnosis_report import format_fe
 
     rng = np.random.default_rng(2026)
     d = draw_case(1, "none").data
@@ -171,7 +171,7 @@ def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
     status, the tie statement with the data's own numbers (loss of omega^2 273.1
     rad^2/s^2 = 0.73 x 2 omega^2 dzeta over levels 1-7), and the same cause and model as
     the FE-level diagnosis."""
-    from cases.fe_loop.update_report import summary, write_update
+    from feloop.update_report import summary, write_update
     from cases.registry import resolve_case
 
     update = resolve_case("double-beam").require("update")
@@ -198,7 +198,7 @@ def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
     model = json.loads((tmp_path / "updated_model.json").read_text())
     assert model["joint"]["K_T_N_per_m"] in (1e7, 1e8, 1e9)
     # update and diagnose --case name the same cause, and the written model is it
-    from cases.fe_loop.diagnosis import fe_diagnosis
+    from feloop.diagnosis import fe_diagnosis
 
     fe = fe_diagnosis(r["data"], mask=r["fit_mask"], levels=DoubleBeamLevels.from_data)["fe"]
     assert model["cause"] == s["cause"] == fe["cause"]
@@ -211,8 +211,8 @@ def test_update_on_the_shipped_data_reports_the_misfit(tmp_path):
 def test_a_catalogue_cause_without_fe_realization_is_listed_not_skipped():
     """A catalogue with a cause the FE level cannot realize (a name no extension has):
     it is in ``untested`` with the reason; the realized ones are not."""
-    from cases.fe_loop.causes import EXTENSIONS
-    from cases.fe_loop.select import untestable
+    from feloop.causes import EXTENSIONS
+    from feloop.select import untestable
     from ident.measured import read_measured
     from cases.paper_data import DATA_FILE
 

@@ -16,7 +16,7 @@ import pytest
 
 import fe_response_synth as synth
 from cases.double_beam.fe_levels import DoubleBeamLevels
-from cases.fe_loop.levels import abscissa_of
+from feloop.levels import abscissa_of
 from fe.hb_resonance import resonance_levels
 from fe.hb_response import BRACKETED, response_levels
 from ident.measured import write_measured
@@ -86,7 +86,7 @@ def test_random_route_is_the_rayleigh_expectation_of_the_backbone():
 
 
 def test_route_of_a_series_and_one_line_for_what_has_none():
-    from cases.casefile.levels import CaseLevels
+    from feloop.case_levels import CaseLevels
 
     fd = synth.series("free-decay", amplitudes=synth.AMPLITUDES[:5] + 0)
     assert abscissa_of(fd) == "response"
@@ -129,8 +129,8 @@ def test_update_recovers_chi_from_a_random_series(tmp_path):
     the planted -0.45 through the Rayleigh route (measured -0.454; the base fit alone,
     18 s of CPU; on 7 levels 46 s; the whole command, extensions and their
     cross-validation included, which the free-decay test above runs, took 80 s)."""
-    from cases.fe_loop.select import fe_select
-    from cases.fe_loop.update import UpdateSettings, load_levels
+    from feloop.select import fe_select
+    from feloop.update import UpdateSettings, load_levels
 
     path = tmp_path / "random.csv"
     write_measured(path, synth.series("random", amplitudes=synth.AMPLITUDES[::2] / 3))

@@ -1,6 +1,6 @@
 """What a fitted cause parameter owes to the assumed force scale s (N per excitation
 unit): omega^2 and zeta of every level are invariant to s when the parameter scales as
-s^force_scale_power (cases.fe_loop.causes), so the power the reports print ("rests on
+s^force_scale_power (feloop.causes), so the power the reports print ("rests on
 the force scale ...: it scales as s^-1") is checked by the simulation itself: the lap
 cantilever's FE-levels model at s = 1 and s = 3."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cases.fe_loop.causes import EXTENSIONS, force_scale_power
+from feloop.causes import EXTENSIONS, force_scale_power
 from cases.registry import resolve_case
 from ident.measured import read_measured
 

@@ -175,11 +175,11 @@ def test_cli_states_the_rig_or_assumes_nothing(tmp_path, capsys):
 
 def test_update_takes_the_stated_rig_to_the_fe_level_noise():
     """``update --rig-repeatability`` reaches the FE level's noise
-    (:func:`cases.fe_loop.select.fe_noise`) through the update settings."""
+    (:func:`feloop.select.fe_noise`) through the update settings."""
     from pathlib import Path
 
-    from cases.fe_loop.select import fe_noise
-    from cases.fe_loop.update import UpdateSettings, load_levels
+    from feloop.select import fe_noise
+    from feloop.update import UpdateSettings, load_levels
     from cli.main import build_parser
     from cli.rig_options import rig_from_args
 

@@ -1,5 +1,5 @@
 """Model updating (inverse/update.py, inverse/profile.py) and the FE double beam by
-parameters (cases/fe_loop/levels.py, the double beam's cases/double_beam/fe_levels.py).
+parameters (feloop/levels.py, the double beam's cases/double_beam/fe_levels.py).
 
 Truths: planted parameters of a closed-form simulator (the modal Iwan relations, paper
 eq. 30-32 with eq. 45 corrected) and of the FE simulation itself, planted noise levels,
@@ -131,7 +131,7 @@ def test_fe_stuck_frequency_and_level_one(fe):
 def test_fe_update_recovers_planted_fe_parameters(fe):
     """Levels simulated by the FE model with planted values and noise: the base fit
     returns them within 3.5 standard errors."""
-    from cases.fe_loop.levels import Simulator
+    from feloop.levels import Simulator
 
     rng = np.random.default_rng(5)
     truth = fe.predict(BASE)
@@ -310,9 +310,9 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
     make it): the FE model choice goes on, that candidate is reported as a failed fit
     with the reason, and the failure is counted."""
     from cases.double_beam.fe_levels import DoubleBeamLevels
-    from cases.fe_loop import causes as fe_causes
-    from cases.fe_loop.diagnosis import report
-    from cases.fe_loop.select import fe_select
+    from feloop import causes as fe_causes
+    from feloop.diagnosis import report
+    from feloop.select import fe_select
 
     monkeypatch.setattr(fe_causes.CubicHardening, "step",
                         lambda self, fe, base, noise, top: float("nan"))
@@ -329,7 +329,7 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
 def test_a_linearized_interval_that_crosses_a_bound_is_cut_and_not_determined():
     """chi = -0.5 with se 0.6 on [-0.98, -0.005]: +-1.96 se reaches -1.68 and 0.68, outside
     both bounds (a user saw [-1.72, 0.56] called "determined"); se 0.1 stays inside."""
-    from cases.fe_loop.update_report import linearized_interval
+    from feloop.update_report import linearized_interval
 
     wide = linearized_interval(-0.5, 0.6, -0.98, -0.005)
     assert wide["interval"] == [-0.98, -0.005] and wide["status"] == "not determined"
@@ -373,8 +373,8 @@ def test_a_cause_whose_optimum_fails_from_a_cold_start_is_counted_not_fatal(monk
     prediction intervals, starts cold): the FE model choice reports it as a failed fit
     with the reason, the judge goes on with the others and the report finishes."""
     from cases.double_beam.fe_levels import DoubleBeamLevels
-    from cases.fe_loop.diagnosis import report
-    from cases.fe_loop.select import fe_select
+    from feloop.diagnosis import report
+    from feloop.select import fe_select
     from fe.newton_path import SteadyStateError
 
     predict = DoubleBeamLevels.predict

@@ -1,4 +1,4 @@
-"""Plausibility of a fitted joint (cases.casefile.plausibility) on the lap cantilever of
+"""Plausibility of a fitted joint (casefile.plausibility) on the lap cantilever of
 docs/case-files.md. Truth: the interface's shear stiffness by hand (aluminium E 70 GPa,
 nu 0.3, overlap 60 x 30 mm, two 5 mm strips: G A / 5 mm) and the issue's absurd joint
 (phi_max 8.7e-14 m), which must read implausible."""
@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from cases.casefile.plausibility import joint_plausibility
-from cases.casefile.schema import read_case_file
+from casefile.plausibility import joint_plausibility
+from casefile.schema import read_case_file
 
 LAP = Path(__file__).resolve().parents[1] / "docs" / "case-files" / "bolted-lap-cantilever.toml"
 

@@ -117,7 +117,7 @@ def test_measured_table_keeps_the_test_and_free_decay_rows_without_excitation(tm
     assert np.all(np.isnan(back.excitation))
     assert back.response_abscissa
     np.testing.assert_array_equal(back.held_amplitude, data.response_amplitude)
-    from cases.fe_loop.update import UpdateSettings, load_levels
+    from feloop.update import UpdateSettings, load_levels
     # update fits free-decay rows at their response amplitude (tests/test_fe_response_update.py)
     got, mask = load_levels(UpdateSettings(data_path=str(path), mode_label=1, fit_levels="1-5"))
     assert mask.sum() == 5 and list(got.test) == ["free-decay"] * n

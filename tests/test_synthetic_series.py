@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cases.synthetic_series import (CATALOGUE, OUT_OF_CATALOGUE, generate_series, truth_of,
+from synthetic import (CATALOGUE, OUT_OF_CATALOGUE, generate_series, truth_of,
                                     without_stds)
-from cases.synthetic_series import mechanisms as mx
-from cases.synthetic_series.first_harmonic import SliderBank, first_harmonic, jenkins_loss
-from cases.synthetic_series.rig import Structure, solve_level
+from synthetic import mechanisms as mx
+from synthetic.first_harmonic import SliderBank, first_harmonic, jenkins_loss
+from synthetic.rig import Structure, solve_level
 from ident.identify import identify
 from joints.describing import describing_function
 from joints.iwan import IwanParameters
@@ -44,8 +44,8 @@ def _module_file(name: str):
 
 
 def test_generator_imports_nothing_from_inverse_transitively():
-    todo = [f"cases.synthetic_series.{p.stem}" if p.stem != "__init__" else
-            "cases.synthetic_series" for p in (ROOT / "cases" / "synthetic_series").glob("*.py")]
+    todo = [f"synthetic.{p.stem}" if p.stem != "__init__" else
+            "synthetic" for p in (ROOT / "synthetic").glob("*.py")]
     seen, chains = set(), {}
     while todo:
         mod = todo.pop()
@@ -63,7 +63,7 @@ def test_generator_imports_nothing_from_inverse_transitively():
                 todo.append(sub)
     bad = sorted(m for m in seen if m.split(".")[0] == "inverse")
     assert not bad, [(m, chains[m]) for m in bad]
-    assert "ident.series" in seen and "cases.synthetic_series.rig" in seen   # the walk ran
+    assert "ident.series" in seen and "synthetic.rig" in seen   # the walk ran
 
 
 # --------------------------------------------------------------------------- physics

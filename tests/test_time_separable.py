@@ -48,8 +48,8 @@ def test_the_diagnosis_and_the_fe_level_test_drift_only_where_time_is_separable(
     """A plain series from the independent generator with repeated levels, its rows
     given the two run orders above: thermal drift untested at both levels on the
     first, tested on the second."""
-    from cases.fe_loop.select import untestable
-    from cases.synthetic_series import generate_series
+    from feloop.select import untestable
+    from synthetic import generate_series
     from inverse.diagnose import diagnose
 
     rng = np.random.default_rng(7)

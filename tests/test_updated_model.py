@@ -1,6 +1,6 @@
 """``--model DIR/updated_model.json``: a case file that leaves its joint to be fitted
 runs ``update``, and the FE commands take the model it fitted
-(cases.casefile.updated).
+(feloop.updated_model).
 
 Truth: the update's own numbers by another route. The case file rebuilt from the JSON
 (calibrated values fixed, every stiffness scaled, the fitted joint) has its FE mode at

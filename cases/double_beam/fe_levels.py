@@ -1,4 +1,4 @@
-"""The FE double beam as an FE-levels model (:class:`cases.fe_loop.levels.FELevels`):
+"""The FE double beam as an FE-levels model (:class:`feloop.levels.FELevels`):
 the double beam's Python model (:mod:`cases.double_beam.model`) at glue stiffness K_T,
 the grip calibrated to 252.0 Hz for each K_T
 (:func:`cases.double_beam.calibration.calibrate_clamp_length`, 0.3 s, cached), the air
@@ -13,7 +13,7 @@ import numpy as np
 
 from cases.double_beam.calibration import calibrate_clamp_length
 from cases.double_beam.model import DoubleBeamConfig, build_double_beam
-from cases.fe_loop.levels import FELevels, LinearPart
+from feloop.levels import FELevels, LinearPart
 from fe.beam import W
 
 __all__ = ["DEFAULT_KT", "DoubleBeamLevels", "ASSUMPTIONS", "DoubleBeamVariant",
@@ -85,6 +85,6 @@ class DoubleBeamVariant:
 
 def assumption_variants() -> dict:
     """:data:`ASSUMPTIONS` as the ``variants`` of
-    :func:`cases.fe_loop.assumptions.assumption_sensitivity`."""
+    :func:`feloop.assumptions.assumption_sensitivity`."""
     return {name: (changes, DoubleBeamVariant(tuple(changes.items())))
             for name, changes in ASSUMPTIONS.items()}

@@ -3,7 +3,7 @@
 :func:`draw_case` draws, from a seed, one measured-data table of the double beam's
 measured mode, made by a different simulation than the one the diagnosis fits. It
 imports nothing from ``inverse/`` (a test checks) and shares no functional form with
-the diagnosis's cause realizations (:mod:`cases.fe_loop.causes`):
+the diagnosis's cause realizations (:mod:`feloop.causes`):
 
 =====================  ==========================================  ==============================
 family (answer)        this generator                              the diagnosis fits

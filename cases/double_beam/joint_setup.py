@@ -53,7 +53,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from cases.double_beam.settings import SOURCE_METHOD, DoubleBeamStudy
-from cases.fe_loop.levels import phi_max_of
+from feloop.levels import phi_max_of
 from fe.reduction import JointBank, JointedSystem, ritz_basis
 from ident.measured import MeasuredData
 from inverse.estimate import estimate

@@ -209,7 +209,7 @@ def run_response_control(args) -> int:
 
 
 def format_prediction(pred: dict) -> str:
-    """Table of :func:`cases.fe_loop.backbone.predict_from_backbone` (``estimate
+    """Table of :func:`feloop.backbone.predict_from_backbone` (``estimate
     --backbone``, ``diagnose --backbone``)."""
     def f(x, spec):
         return "n/a" if x is None else format(x, spec)

@@ -65,7 +65,7 @@ def _measured(case, modes: list) -> dict | None:
 
 
 def run(args) -> int:
-    from cases.casefile.summary import format_summary
+    from casefile.summary import format_summary
 
     case = resolve_case(args.case)
     summary = case.summary()

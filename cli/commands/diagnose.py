@@ -80,7 +80,7 @@ def load(file: str | None, case: str | None, args=None):
         return (series_from_args(args) if args is not None else read_measured(file)), None
     parts = case.split(":")
     if len(parts) == 3 and parts[0] == "synthetic":
-        from cases.synthetic_series import generate_series, truth_of
+        from synthetic import generate_series, truth_of
 
         try:
             truth_of(parts[1])
@@ -188,7 +188,7 @@ def format_text(r: dict, source: str) -> str:
 
         lines.extend(format_fe_check(r["fe_check"]))
     if "fe" in r:
-        from cases.fe_loop.diagnosis_report import format_fe
+        from feloop.diagnosis_report import format_fe
         lines.extend(format_fe(r["fe"]))
     return "\n".join(lines)
 
@@ -222,12 +222,12 @@ def write_report(result: dict, out: Path, source: str) -> list[Path]:
 def _backbone_prediction(args, data, mode) -> dict:
     """``--backbone``: the estimator's joint (method exact, all levels but the top three,
     B~ from the case's FE model) put into the FE model, every level read off its EPMC
-    backbone (:func:`cases.fe_loop.backbone.predict_from_backbone` on the case's
+    backbone (:func:`feloop.backbone.predict_from_backbone` on the case's
     FE-levels model)."""
     case = model_case(args.case)
     if case is None or not args.files:
         raise InputError("--backbone needs FILE and --case")
-    from cases.fe_loop.backbone import predict_from_backbone
+    from feloop.backbone import predict_from_backbone
     from inverse.estimate import estimate
 
     levels = case.require("fe_levels")
@@ -257,7 +257,7 @@ def run(args) -> int:
         result["fe_check"] = case.builders["fe_check"](float(level1.omega2[0]))
     if case is not None and "fe_levels" in case.capabilities:
         # the FE model refitted, base vs extended (issue 13), by the one judge
-        from cases.fe_loop.diagnosis_report import add_fe_diagnosis
+        from feloop.diagnosis_report import add_fe_diagnosis
         add_fe_diagnosis(result, data, out=args.out, levels=case.builders["fe_levels"],
                          model_key=case.source)
     if args.backbone:

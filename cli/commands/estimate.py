@@ -120,13 +120,13 @@ def _kappa_label(est) -> str:
 
 
 def _backbone(args, data, est):
-    """The backbone predictions of ``--backbone`` (:mod:`cases.fe_loop.backbone` on the
+    """The backbone predictions of ``--backbone`` (:mod:`feloop.backbone` on the
     case's FE-levels model), or None."""
     if not args.backbone:
         return None
     if args.case is None:
         raise ValueError("--backbone needs --case (the FE model the joint is put into)")
-    from cases.fe_loop.backbone import predict_from_backbone
+    from feloop.backbone import predict_from_backbone
 
     levels = resolve_case(args.case).require("fe_levels")
     return predict_from_backbone(data, est, levels, args.force_scale, case_name=args.case)

@@ -1,5 +1,5 @@
 """``iwanfe uncertainty --case FILE``: the Monte Carlo of a case's FE-levels model
-over ``update``'s selected model (:mod:`cases.fe_loop.uncertainty`: exact describing
+over ``update``'s selected model (:mod:`feloop.uncertainty`: exact describing
 function at phase resonance per sample), for a case without its own ``uncertainty``
 study; options, text and files."""
 from __future__ import annotations
@@ -19,7 +19,7 @@ def _f(x, spec):
 
 
 def text(r: dict) -> str:
-    """The readable report of :func:`cases.fe_loop.uncertainty.run_fe_uncertainty`."""
+    """The readable report of :func:`feloop.uncertainty.run_fe_uncertainty`."""
     m, c, dist = r["model"], r["confidence"], r["distribution"]
     lo, hi = (100 * (1 - c) / 2, 100 * (1 + c) / 2)
     ch = r["chi"] or {"median": math.nan, "lo": math.nan, "hi": math.nan}

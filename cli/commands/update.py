@@ -1,8 +1,8 @@
 """``iwanfe update``: the FE model's joint, damping and frequency fitted to measured levels.
 
 Parses, asks the case (:func:`cases.registry.resolve_case`) for its ``update``
-capability (:func:`cases.fe_loop.update.run_update` on its FE-levels model),
-prints (:mod:`cases.fe_loop.update_report`).
+capability (:func:`feloop.update.run_update` on its FE-levels model),
+prints (:mod:`feloop.update_report`).
 """
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from cases.fe_loop.update_report import format_text, summary, write_update
+    from feloop.update_report import format_text, summary, write_update
     from cases.registry import resolve_case
 
     update = resolve_case(args.case).require("update")

@@ -23,7 +23,7 @@ catalogue order is each module's ``ORDER``. A cause module defines:
 * ``testable(obs) -> (bool, reason)``: whether these data can test it at all;
 * ``FE_REALIZATION``: the slot for its FE-level realization (None until the FE level
   fills it: a callable building the FE physics of the cause, see
-  ``cases/fe_loop/causes.py``).
+  ``feloop/causes.py``).
 
 Adding a cause: drop a file here (no other file needs to change; the pair advice of
 :mod:`inverse.diagnosis.separability` falls back to "add levels above the top one"

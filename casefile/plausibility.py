@@ -1,0 +1,69 @@
+"""Plausibility of a fitted joint against the case file's interfaces.
+
+After ``update`` on a case file, each fitted physical joint parameter is set against a
+range and its source; outside it the report says ``implausible`` with both numbers
+(the fit is still reported: the data may hold a mechanism the model lacks, which the
+diagnosis names). The checks (every one computed from the file, no constant tuned to
+data):
+
+* ``phi_max`` (slip onset, m) at least :data:`PHI_MAX_FLOOR` (1 nm: below the
+  roughness of any machined contact, Ra >= 0.1 um, a joint cannot stick and slip) and at
+  most :data:`PHI_MAX_SHARE` of the shortest joint interface's length (a joint that
+  slips by a tenth of its overlap before it slides is no longer a lap);
+* ``K_T`` (stuck stiffness, N/m) at most the interfaces' shear stiffness ``G A /
+  ((h_bottom + h_top) / 2)`` (the two half-layers between the strips' reference lines
+  and the contact, ``G = E / (2 (1 + nu))`` with nu = 0.3 assumed): a stuck contact in
+  series with those layers cannot be stiffer than they are;
+* ``F_S`` (N): not checked, the case file gives no preload (friction x preload would
+  bound it); said so.
+"""
+from __future__ import annotations
+
+__all__ = ["PHI_MAX_FLOOR", "PHI_MAX_SHARE", "POISSON", "joint_plausibility"]
+
+PHI_MAX_FLOOR = 1e-9
+PHI_MAX_SHARE = 0.1
+POISSON = 0.3
+
+
+def _shear_stiffness(cf, itf) -> float:
+    """``G A / ((h_b + h_t) / 2)`` of one interface (N/m), at its midpoint's sections."""
+    x = 0.5 * (itf.x[0] + itf.x[1])
+    (hb, _, wb), (ht, _, wt) = (cf.beam(n).section_at(x) for n in itf.beams)
+    E = min(cf.material(cf.beam(n).material).E for n in itf.beams)
+    area = (itf.x[1] - itf.x[0]) * min(wb, wt)
+    return E / (2.0 * (1.0 + POISSON)) * area / (0.5 * (hb + ht))
+
+
+def joint_plausibility(cf, joint: dict) -> list[dict]:
+    """Checks of ``joint`` (``phi_max`` m, ``K_T`` N/m, ``F_S`` N: the joint of the
+    update's prediction, :class:`feloop.levels.LevelPrediction`) against the file
+    ``cf``: one dict per check with ``parameter``, ``value``, ``kind`` (fitted, assumed),
+    ``low``, ``high`` (None: unbounded), ``source``, ``verdict`` (``plausible``,
+    ``implausible`` or ``not checked``)."""
+    itfs = [i for i in cf.interfaces if i.tangential == "joint"]
+    if not itfs:
+        return []
+    shortest = min(i.x[1] - i.x[0] for i in itfs)
+    k_shear = sum(_shear_stiffness(cf, i) for i in itfs)
+    out = []
+
+    def check(name, value, kind, low, high, source):
+        inside = (low is None or value >= low) and (high is None or value <= high)
+        out.append({"parameter": name, "value": value, "kind": kind, "low": low,
+                    "high": high, "source": source,
+                    "verdict": "plausible" if inside else "implausible"})
+
+    check("phi_max_m", float(joint["phi_max"]), "fitted", PHI_MAX_FLOOR, PHI_MAX_SHARE * shortest,
+          f"1 nm (below any machined roughness) to {PHI_MAX_SHARE:g} x the shortest joint "
+          f"interface ({shortest:g} m)")
+    check("K_T_N_per_m", float(joint["K_T"]), "assumed unless profiled",
+          None, k_shear,
+          f"at most the interfaces' shear stiffness G A / mean half-thickness = "
+          f"{k_shear:.3g} N/m (nu = {POISSON} assumed)")
+    out.append({"parameter": "F_S_N", "value": float(joint["F_S"]), "kind": "fitted",
+                "low": None,
+                "high": None, "source": "the case file gives no preload (friction x "
+                "preload would bound it)", "verdict": "not checked"})
+    return out
+

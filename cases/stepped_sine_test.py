@@ -1,0 +1,108 @@
+"""A measured-data table for a case file made by another route than the FE-levels fit
+(:mod:`feloop.case_levels`), with a seeded ``chi`` the fit never sees.
+
+Route: the case file's jointed model (:func:`casefile.nonlinear.nonlinear_case`,
+Ritz basis, the file's ``[damping] zeta``) with its joints as Jenkins banks (8 sliders
+per octave, :meth:`fe.reduction.JointBank.log_spaced`), not the exact Iwan describing
+function; a stepped sine over ``LINES`` lines around the mode solved by multi-harmonic
+balance (harmonics 1, 3, 5; 64 AFT samples, :func:`runs.stepped_sine.run_campaign`), not
+phase resonance; each level's receptance identified by LSCF
+(:func:`ident.identify.identify_modes`, the mode with the largest residue); Gaussian
+repeatability noise (relative sd ``SIGMA_OMEGA2`` of omega^2, ``SIGMA_ZETA`` of zeta)
+from the seed. The joints keep the file's ``kt``, ``fs``, ``beta`` and take the seeded
+``chi`` (uniform in ``CHI_RANGE``); the forces (N, 10 levels over a factor 512) put the
+top level's linear slip at ``TOP_SLIP`` phi_max (micro-slip only: the hidden effect is
+``none``).
+
+``python -m cases.stepped_sine_test CASE.toml OUT.csv SEED`` writes the table
+(``x_source = simulated``; the seeded chi only printed) and prints the truth. SI units.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+
+import numpy as np
+
+from fe.harmonic_balance import HBSettings
+from fe.reduction import JointBank
+from ident.identify import identify_modes
+from ident.modal_data import MeasuredData
+from runs.campaign import Campaign, HBProtocol
+from runs.stepped_sine import run_campaign
+
+CHI_RANGE = (-0.7, -0.25)
+TOP_SLIP = 0.4
+#: smallest slider slip of the Jenkins banks, in phi_max (below the level-1 slip)
+BANK_LOW = 1e-5
+SIGMA_OMEGA2, SIGMA_ZETA = 1e-5, 5e-4
+HB = HBSettings(n_harmonics=5, n_time=64, odd_only=True)
+#: lines: from ``-BAND_HALF_POWER`` to ``+BAND_HALF_POWER / 2`` half-power bandwidths about
+#: the stuck frequency, ``LINES`` of them
+BAND_HALF_POWER, LINES = 3.0, 41
+
+
+def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
+    """(table, truth) of :class:`cases.case.Case` ``case`` (a case file with joints and
+    ``[measured] mode``) for ``seed`` (module docstring)."""
+    from casefile.nonlinear import nonlinear_case
+
+    rng = np.random.default_rng(seed)
+    chi = float(rng.uniform(*CHI_RANGE))
+    cf, _ = case.builders["calibrated_file"]()
+    itfs = tuple(dataclasses.replace(i, chi=chi) if i.tangential == "joint" else i
+                 for i in cf.interfaces)
+    cf = dataclasses.replace(cf, interfaces=itfs)
+    model = case.fe_model()
+    nc = nonlinear_case(cf, model)
+    red, k = nc.model, nc.mode - 1
+    phi = red.basis[:, k]
+    omega = float(red.omega[k])
+    zeta = float(red.C[k, k] / (2.0 * omega))
+    load = np.zeros(model.M.shape[0])
+    load[nc.drive_dof] = 1.0
+    slip_per_n = float(np.max(np.abs(model.slip_matrix @ phi))) * abs(phi[nc.drive_dof]) \
+        / (2.0 * zeta * omega ** 2)          # linear modal slip at resonance per N
+    force = TOP_SLIP * nc.phi_max / slip_per_n * 2.0 ** (np.arange(10) - 9.0)
+    bank = JointBank.log_spaced(nc.joints, BANK_LOW * nc.phi_max, 8)
+    f0 = omega / (2 * math.pi)
+    hp = 2.0 * zeta * f0
+    lines = np.linspace(f0 - BAND_HALF_POWER * hp, f0 + 0.5 * BAND_HALF_POWER * hp, LINES)
+    camp = Campaign(lines, force, load, np.array([nc.response_dof]), HBProtocol(HB))
+    res = run_campaign(red, bank, camp, progress=False)
+    rec = res.receptance[:, :, 0]
+    om2, ze = np.empty(force.size), np.empty(force.size)
+    for lv in range(force.size):
+        modes = identify_modes(lines, rec[lv], band=(lines[0], lines[-1]),
+                               weighting="uniform", pseudo_modes=False)
+        if not modes:
+            raise RuntimeError(f"no mode identified at level {lv + 1}")
+        m = max(modes, key=lambda m: float(np.max(np.abs(m.shape))))   # the dominant mode
+        om2[lv], ze[lv] = m.omega2, m.zeta
+    n = force.size
+    label = cf.measured.mode if cf.measured is not None and cf.measured.mode else nc.mode
+    run_order = rng.permutation(n) + 1
+    data = MeasuredData(level=np.arange(1, n + 1), excitation=force,
+                        omega2=om2 * (1.0 + SIGMA_OMEGA2 * rng.standard_normal(n)),
+                        zeta=ze * (1.0 + SIGMA_ZETA * rng.standard_normal(n)),
+                        mode=np.full(n, int(label)), run_order=run_order,
+                        extra={"x_source": np.full(n, "simulated")})
+    return data, {"chi": chi, "zeta_v": zeta, "f0_hz": f0, "phi_max": nc.phi_max,
+                  "top_slip_over_phi_max": TOP_SLIP, "forces_N": force.tolist(),
+                  "fallbacks": res.fallback_summary()}
+
+
+def main(argv=None) -> int:
+    from cases.registry import resolve_case
+    from ident.measured import write_measured
+
+    case_file, out, seed = (argv if argv is not None else sys.argv[1:])[:3]
+    data, truth = simulate(resolve_case(case_file), int(seed))
+    write_measured(out, data)
+    print(f"wrote {out} (simulated): truth {truth}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

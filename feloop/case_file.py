@@ -1,0 +1,170 @@
+"""The FE loop of a case file: its FE-levels model (:class:`feloop.case_levels.
+CaseLevels`), ``update`` (:func:`feloop.update.run_update` on it, the one judge
+of :func:`feloop.select.fe_select` choosing the model), the assumed properties
+``update --assumptions`` changes (:func:`assumption_variants`) and ``uncertainty``
+(:func:`feloop.uncertainty.run_fe_uncertainty` on it), for a file whose joint
+interfaces all have law ``iwan4`` and a ``kt``, with a ``[drive]`` and a ``[measured]``
+table.
+
+Defaults a command may override: the data are the file's table, the mode label the
+file's ``[measured] mode`` when the table has it (else the table's only mode label),
+the fit levels all but the top three of the table (at least 5 fitted). The file's
+``chi``, ``fs``, ``beta`` are the nominal joint: ``update`` fits ``chi`` and the joint
+strength to the data.
+
+Assumed properties (:func:`assumption_variants`), each changed alone: every material's
+``E`` by -/+ 3 % and ``rho`` by -/+ 2 % (the spread of handbook values of one alloy), every
+point mass and sensor mass halved and doubled (attachments are rarely weighed), every
+distributed interface's ``joint_elements`` n -> 2n - 1 (its discretization); a parameter
+the file calibrates (``[calibrate]``) is not assumed and is left out.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from casefile.parameters import get_parameter, set_parameter
+from casefile.plausibility import joint_plausibility
+from ident.errors import InputError
+
+__all__ = ["qualifies", "levels_builder", "assumption_variants", "update_builder",
+           "uncertainty_builder"]
+
+
+def qualifies(cf) -> bool:
+    """The file has what the FE loop needs (module docstring)."""
+    joints = [i for i in cf.interfaces if i.tangential == "joint"]
+    return bool(joints) and all(i.law == "iwan4" and i.kt for i in joints) \
+        and cf.drive is not None and cf.measured is not None and bool(cf.measured.files)
+
+
+@dataclass(frozen=True)
+class CaseFileLevels:
+    """``levels(data, force_scale=1.0)``: the :class:`CaseLevels` of ``data`` for case
+    file ``cf`` (picklable, for process executors)."""
+
+    cf: object
+
+    def __call__(self, data, force_scale: float = 1.0):
+        from feloop.case_levels import CaseLevels
+
+        return CaseLevels.from_data(data, cf=self.cf, force_scale=force_scale)
+
+
+def levels_builder(cf):
+    """``levels(data, force_scale=1.0)``: the :class:`CaseLevels` of ``data``."""
+    return CaseFileLevels(cf)
+
+
+def _assumed(cf) -> list[tuple[str, float]]:
+    """(address, factor) of every change of the module docstring."""
+    out = []
+    for i, _ in enumerate(cf.materials):
+        out += [(f"material.{i}.E", f) for f in (0.97, 1.03)]
+        out += [(f"material.{i}.rho", f) for f in (0.98, 1.02)]
+    for i, _ in enumerate(cf.masses):
+        out += [(f"mass.{i}.mass", f) for f in (0.5, 2.0)]
+    for i, s in enumerate(cf.sensors):
+        if getattr(s, "mass", None):
+            out += [(f"sensor.{i}.mass", f) for f in (0.5, 2.0)]
+    calibrated = set(cf.calibrate.parameters) if cf.calibrate is not None else set()
+    return [(a, f) for a, f in out if a not in calibrated]
+
+
+def assumption_variants(cf) -> dict:
+    """name -> (changes, levels) of every assumed property changed (module docstring),
+    the ``variants`` of :func:`feloop.assumptions.assumption_sensitivity`."""
+    out = {}
+    for address, factor in _assumed(cf):
+        old = get_parameter(cf, address)
+        out[f"{address} {factor * old:.4g} ({old:.4g})"] = (
+            {address: factor * old}, CaseFileLevels(set_parameter(cf, address, factor * old)))
+    for i, itf in enumerate(cf.interfaces):
+        n = itf.joint_elements
+        if itf.tangential == "joint" and n:
+            items = list(cf.interfaces)
+            items[i] = dataclasses.replace(itf, joint_elements=2 * n - 1)
+            out[f"interface.{i}.joint_elements {2 * n - 1} ({n})"] = (
+                {f"interface.{i}.joint_elements": 2 * n - 1},
+                CaseFileLevels(dataclasses.replace(cf, interfaces=tuple(items))))
+    return out
+
+
+def _defaults(cf, data_path=None, mode=None) -> dict:
+    """Data, mode label and fit levels (module docstring) of the table at ``data_path``
+    (default the file's) and ``mode`` (default the file's)."""
+    from ident.measured import read_measured
+
+    path = cf.measured.file if data_path is None else data_path
+    table = read_measured(path)
+    labels = sorted({int(m) for m in table.mode})
+    if mode is None:
+        mode = cf.measured.mode if cf.measured.mode in labels else labels[0]
+        if len(labels) > 1 and mode != cf.measured.mode:
+            raise InputError(f"{path}: [measured] mode = {cf.measured.mode} is none of the "
+                             f"table's mode labels {labels}: give --mode")
+    elif int(mode) not in labels:
+        raise InputError(f"{path}: no mode {mode} in the table (labels {labels})")
+    levels = sorted({int(v) for v in table.for_mode(mode).level})   # a repeat is one level
+    fit = levels[:max(5, len(levels) - 3)]
+    return {"data_path": str(path), "mode_label": int(mode),
+            "fit_levels": ",".join(map(str, fit))}
+
+
+def _nominal_joint_note(cf) -> str:
+    """What the file says of its joints beside what update fits: the nominal joint of
+    modes and backbone where chi, fs and beta are given, 'left to be fitted' where one is
+    not (the case-file spec allows either)."""
+    parts = []
+    for k, i in enumerate(cf.interfaces):
+        if i.tangential != "joint":
+            continue
+        given = {"chi": i.chi, "fs": i.fs, "beta": i.beta}
+        missing = [name for name, v in given.items() if v is None]
+        if missing:
+            parts.append(f"[interface.{k}] {', '.join(missing)} left to be fitted")
+        else:
+            parts.append(f"[interface.{k}] chi = {i.chi:g}, fs = {i.fs:g} N, beta = "
+                         f"{i.beta:g} (nominal joint of modes and backbone)")
+    return (f"the file's joints: {'; '.join(parts)}; update fits chi and the joint strength "
+            f"to the measured levels (beta: the ln(phi_max/a_ref) row below; "
+            f"docs/case-file-loop.md)")
+
+
+def update_builder(cf):
+    """``update(executor, progress, store, **settings)`` (fields of
+    :class:`feloop.update.UpdateSettings`; the defaults of the module docstring
+    fill what is not given)."""
+    def update(executor="serial", progress=False, store=None, **settings):
+        from feloop.update import UpdateSettings, run_update
+
+        settings = {k: v for k, v in settings.items() if v is not None}
+        settings = {**_defaults(cf, settings.get("data_path"), settings.get("mode_label")),
+                    **settings}
+        variants = assumption_variants(cf) if settings.get("assumptions") else None
+        r = run_update(UpdateSettings(**settings), levels_builder(cf), executor=executor,
+                       progress=progress, store=store, case_name=cf.name,
+                       model_key=cf.path.read_text(), assumptions=variants)
+        r["notes"] = [_nominal_joint_note(cf)]
+        r["plausibility"] = joint_plausibility(cf, r["prediction"].joint)
+        return r
+    return update
+
+
+def uncertainty_builder(cf):
+    """``uncertainty(data_path, mode_label, fit_levels, force_scale, **options)``:
+    :func:`feloop.uncertainty.run_fe_uncertainty` on the file's FE-levels model
+    (``options``: its ``n_samples``, ``seed``, ``confidence``, ``distribution``, ``out``,
+    ``executor``, ``progress``; the defaults of the module docstring fill the rest)."""
+    def uncertainty(data_path=None, mode_label=None, fit_levels=None, force_scale=1.0,
+                    **options):
+        from casefile.build import build_model
+        from casefile.calibrate import calibrate
+        from feloop.uncertainty import LevelsStudy, run_fe_uncertainty
+
+        d = _defaults(cf, data_path, mode_label)
+        study = LevelsStudy(d["data_path"], d["mode_label"], fit_levels or d["fit_levels"],
+                            float(force_scale), cf.name)
+        model = build_model(calibrate(cf)[0]).model
+        return run_fe_uncertainty(levels_builder(cf), model, study, **options)
+    return uncertainty

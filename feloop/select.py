@@ -1,0 +1,321 @@
+"""The FE-level model choice shared by ``diagnose --case`` and ``update`` (any case).
+
+:func:`fe_select` fits, on the fit levels, the base FE model
+(:mod:`feloop.levels`) and the FE realization of every cause the data can
+test (:mod:`feloop.causes`), then pairs of the best single cause with
+each other cause that earned its cost alone (unless the best single is already so good
+that no pair could outweigh it), and lets the one judge choose
+(:func:`inverse.fe_selection.judge_extensions` -> :func:`inverse.judge.select`: fit
+test, cost per cause, held-out gain > 1; ``unexplained`` when no candidate brings the
+fit levels within their noise).
+
+Noise (:func:`fe_noise`): :func:`inverse.judge.noise_model` of the whole series, the
+abscissa of the one-mode diagnosis (``excitation / (zeta omega^2)``, or the held
+response amplitude): the identification's stds plus the repeatability (the same
+curve families), so the FE level and the one-mode diagnosis judge the same table
+against the same noise.
+
+Not tested (:func:`untestable`): ``thermal-drift`` when the run order is monotone in
+amplitude, a repeat run next to its level counting with it
+(:func:`inverse.judge.time_separable`, the one-mode diagnosis's rule: a drift with time
+cannot be told from an amplitude effect);
+``nonproportional-amplitude`` always (the FE fit compares omega^2 and zeta only: a force
+shortfall changes the abscissa of a law that chi already bends; it needs a response
+channel); a cause of the catalogue without an FE realization, always, by name.
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from feloop.causes import EXTENSIONS, Combined
+from feloop.engagement import KT_GRID, check_engagement, engagement
+from feloop.levels import BASE_PARAMETERS, FELevels, Simulator
+from inverse import judge
+from inverse.diagnosis.causes import CATALOGUE
+from inverse.fe_selection import FitCandidate, judge_extensions
+from inverse.estimate import estimate
+from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Parameter,
+                            UpdateProblem, fit)
+
+__all__ = ["MICRO_LIMIT", "estimator_start", "base_parameters", "Headline", "fe_noise",
+           "untestable", "fit_base", "cold_failure", "fe_select", "chosen_model"]
+
+#: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
+MICRO_LIMIT = 50.0
+#: Largest stuck frequency of the paper's estimator taken as a start, over the first
+#: level's frequency (assumed: a joint that softens a mode by 25 % between zero amplitude
+#: and its lowest tested level is past micro-slip there).
+ESTIMATE_F0_MAX = 1.25
+
+
+def estimator_start(data, levels) -> tuple[dict | None, str | None]:
+    """The paper's estimator (``exact``, on ``levels``) as a start of the base fit:
+    (``chi``, ``ln_dc1``, ``zeta_v``, ``f0_hz``) and None, or None and why it is not
+    used (it failed, chi or kappa1 B~ outside the fit's box, or its stuck frequency more
+    than :data:`ESTIMATE_F0_MAX` times the first level's: a scatter in damping can throw
+    its extrapolation to zero amplitude far off)."""
+    try:
+        est = estimate(data, fit_levels=levels, method="exact")
+    except ValueError as exc:
+        return None, f"the paper's estimator failed ({str(exc)[:80]})"
+    if not -0.98 < est.chi < -0.005:
+        return None, f"the paper's estimator gave chi = {est.chi:.3g}, outside (-0.98, -0.005)"
+    if not est.kappa1_B > 0:
+        return None, (f"the paper's estimator gave kappa1 B~ = {est.kappa1_B:.3g} <= 0 "
+                      "(damping that does not grow with level)")
+    f_est = math.sqrt(max(est.omega2_linear, 0.0)) / (2 * math.pi)
+    f1 = math.sqrt(float(data.omega2[0])) / (2 * math.pi)
+    if not 0 < f_est <= ESTIMATE_F0_MAX * f1:
+        return None, (f"the paper's estimator put the stuck frequency at {f_est:.4g} Hz, "
+                      f"not within {ESTIMATE_F0_MAX:g} times the first level's {f1:.4g} Hz "
+                      "(assumed limit)")
+    return {"chi": est.chi, "ln_dc1": math.log(est.kappa1_B),
+            "zeta_v": est.c_modal / (2.0 * math.sqrt(est.omega2_linear)), "f0_hz": f_est}, None
+
+
+def base_parameters(data, mask, fe: FELevels, estimated=None) -> tuple[dict, list]:
+    """Parameters of the base model and their starts; the start list holds the paper's
+    estimator (:func:`estimator_start`, the fit levels; ``estimated``: its result when
+    already computed), two others of chi and, when the estimator gave the first, the
+    start from the first level alone (the frequency bounds hold both)."""
+    lv = [int(v) for v in data.level[mask]]
+    w1 = math.sqrt(float(data.omega2[0]))
+    naive = {"chi": -0.4, "ln_dc1": math.log(2.0 * float(data.omega2[0]) * 1e-4),
+             "zeta_v": float(data.zeta[0]), "f0_hz": w1 / (2 * math.pi)}
+    est, _ = estimator_start(data, lv) if estimated is None else estimated
+    first = est or naive
+    chi0, dc0 = first["chi"], math.exp(first["ln_dc1"])
+    zv0, f00 = first["zeta_v"], first["f0_hz"]
+    P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
+         "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
+                             "ln |kappa1| B~ at level 1: the joints' modal damping there"),
+         "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
+                             "viscous modal damping ratio"),
+         "f0_hz": Parameter("f0_hz", f00, 0.95 * min(f00, naive["f0_hz"]),
+                            1.05 * max(f00, naive["f0_hz"]), 1e-3, "Hz",
+                            "stuck-joint natural frequency of the mode"),
+         "log10_kt": Parameter("log10_kt", math.log10(fe.default_kt),
+                               6.0, 11.0, 0.5, "log10 N/m",
+                               "stuck tangential stiffness of all joints together"),
+         "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
+                                "1", "ln(phi_max / a_ref): macro-slip onset in units of "
+                                "the level-1 joint slip (beta = 0 above its limit)")}
+    starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
+    if est is not None:                  # a noisy series can mislead the estimator
+        starts.append(naive)
+    return P, starts
+
+
+@dataclass
+class Headline:
+    """``describe`` of :class:`inverse.update.UpdateProblem`: the headline figures of a
+    parameter set: frequency (Hz) and zeta at the held-out levels, top slip over
+    phi_max, R~ and phi_max (picklable)."""
+
+    fe: FELevels
+    held_out: np.ndarray
+    extension: object = None
+
+    def __call__(self, values: dict) -> dict:
+        pred = self.fe.predict(values, self.extension)
+        h = np.flatnonzero(self.held_out)
+        return {"frequency_hz": pred.frequency_hz[h].tolist(), "zeta": pred.zeta[h].tolist(),
+                "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1]),
+                "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
+
+
+def fe_noise(data, cap: bool = True):
+    """(judge noise, :class:`inverse.update.NoiseModel` of its totals) of one mode's
+    levels (module docstring); ``cap`` as in :func:`inverse.judge.noise_model`."""
+    jn = judge.noise_model(data.resonant_amplitude, {"omega2": data.omega2, "zeta": data.zeta},
+                           {"omega2": data.omega2_std, "zeta": data.zeta_std},
+                           data.level, data.run_order,
+                           prior=judge.prior_for(data.rig_repeatability), cap=cap)
+    dof = [jn.dof[c] for c in ("omega2", "zeta")]
+    words = "; ".join(f"{c}: {jn.source[c]}" for c in ("omega2", "zeta"))
+    return jn, NoiseModel(jn.total["omega2"], jn.total["zeta"], words,
+                          dof=None if all(math.isinf(d) for d in dof) else int(min(dof)))
+
+
+def untestable(data, catalogue=None) -> dict:
+    """Causes the data cannot test at the FE level, with the reason (module docstring);
+    every cause of the ``catalogue`` (default: :data:`inverse.diagnosis.causes.CATALOGUE`)
+    without an FE realization (:data:`feloop.causes.EXTENSIONS`) is listed as not
+    tested at the FE level, never skipped without a word."""
+    out = {c: "no FE realization (feloop/causes.py): not tested at the FE level"
+           for c in (CATALOGUE if catalogue is None else catalogue) if c not in EXTENSIONS}
+    out["nonproportional-amplitude"] = ("the FE fit compares omega2 and zeta only; a force "
+                                        "shortfall needs a response channel")
+    if not judge.time_separable(data.level, data.run_order, data.resonant_amplitude):
+        out["thermal-drift"] = ("the levels were run in order of amplitude: a drift with "
+                                "time cannot be told from an amplitude effect")
+    return out
+
+
+#: Optimizer tolerance of the selection fits (chi2 to about 1e-6 relative).
+FIT_TOL = 1e-6
+
+
+def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
+    """The best fit from ``starts``, and the starts."""
+    best = None
+    reset = getattr(problem.simulate, "reset", None)
+    for s in starts:
+        f = fit(problem, free, start=s, tol=FIT_TOL)
+        if not f.success and reset is not None:
+            reset()        # a failed start leaves no warm starts to the next one
+        if best is None or (f.success, -f.chi2) > (best.success, -best.chi2):
+            best = f
+    return best, list(starts)
+
+
+def cold_failure(fe: FELevels, f, ext=None) -> str | None:
+    """Why fit ``f`` cannot be simulated at its optimum from a cold start (None: it
+    can). A fit reaches its optimum through warm-started simulations, which can carry
+    the balance where a cold start does not converge; every later use of the model
+    (profiles, prediction intervals, ``uncertainty``) starts cold. A copy is probed,
+    so ``fe`` keeps its warm starts."""
+    if f is None:
+        return None
+    probe = copy.copy(fe)
+    probe.reset()
+    try:
+        probe.predict(f.values, ext)
+    except SIMULATION_FAILURES as exc:
+        return f"its optimum cannot be simulated from a cold start: {exc}"
+    return None
+
+
+def _problem(base_problem, fe, ext, base_pred, top):
+    spec = ext.spec(fe, base_pred, base_problem.noise, top)
+    P = dict(base_problem.parameters)
+    for s in (spec if isinstance(spec, list) else [spec]):
+        P[s.name] = s
+    return UpdateProblem(Simulator(fe, ext), base_problem.omega2, base_problem.zeta,
+                         base_problem.noise, base_problem.fit_mask, P,
+                         describe=Headline(fe, ~base_problem.fit_mask, ext))
+
+
+def _fit_extension(problem, ext, start_values, chi_starts):
+    """Multi-start fit of ``ext`` (its starts x ``chi_starts``) from ``start_values``;
+    (fit or None, the starts)."""
+    free = BASE_PARAMETERS + tuple(ext.parameter_names)
+    specs = [problem.parameters[n] for n in ext.parameter_names]
+    starts = [dict(start_values, chi=chi, **s0) for s0 in ext.start_sets(specs)
+              for chi in chi_starts]
+    f, s = fit_base(problem, starts, free)
+    return (f if f is not None and f.success else None), s
+
+
+def _inactive(ext, f) -> bool:
+    """The extension's parameter sits at its ``none`` value (the base model)."""
+    bound = {"lower": ext.lower, "upper": ext.upper}
+    return any(f.at_bound.get(n) and bound[f.at_bound[n]] == 0.0
+               for n in ext.parameter_names) or \
+        (ext.cause == "macro-slip" and f.at_bound.get("ln_phimax") == "upper")
+
+
+def fe_select(data, mask, fe: FELevels, causes=None,
+              progress=None, cap: bool = True) -> dict:
+    """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring);
+    ``causes``: the extensions to try (None: every one; empty: the base model alone);
+    ``cap``: judge a scatter far above the assumed rig repeatability against it
+    (:func:`fe_noise`).
+
+    Returns ``fe``, ``noise`` (update form), ``judge_noise``, ``base`` (FitCandidate),
+    ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
+    :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason),
+    ``chosen`` (name of the selected candidate: the closest one when unexplained) and
+    ``estimator_start`` ("used", or why the paper's estimator gave no start:
+    :func:`estimator_start`) and ``engagement`` (:mod:`feloop.engagement`:
+    checked first; data that move the mode more than its joints can are one line, exit
+    2, never a fit)."""
+    jn, noise = fe_noise(data, cap)
+    engaged = check_engagement(engagement(data, fe, noise, 10.0 ** max(KT_GRID)))
+    try:
+        return {**_select(data, mask, fe, causes, progress or (lambda s: None), (jn, noise)),
+                "engagement": engaged}
+    except ValueError as exc:          # the input was checked before: ours, not the user's
+        raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
+
+
+def _select(data, mask, fe, causes, say, noises) -> dict:
+    jn, noise = noises                       # fe_noise of the data, computed once
+    estimated = estimator_start(data, [int(v) for v in data.level[mask]])
+    P, starts = base_parameters(data, mask, fe, estimated)
+    base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
+                                 describe=Headline(fe, ~mask))
+    say("base")
+    bfit, base_starts = fit_base(base_problem, starts)
+    if not bfit.success:
+        raise InternalError(f"the base FE model could not be fitted from any of its "
+                            f"{len(base_starts)} starts ({bfit.message})")
+    base = FitCandidate((), base_problem, bfit, base_starts)
+    try:
+        base_pred = fe.predict(bfit.values)
+    except SIMULATION_FAILURES:      # the warm starts of the last fit evaluation
+        fe.reset()
+        base_pred = fe.predict(bfit.values)
+    top = int(np.flatnonzero(mask).max())
+    skip = untestable(data)
+    exts, singles = {}, []
+    # chi from the base optimum and from -0.5 (an extension can move chi far: a slip
+    # onset or a hardening bends the top levels, which chi then need not do)
+    chi_starts = sorted({bfit.values["chi"], -0.5})
+    for cause in (EXTENSIONS if causes is None else causes):
+        if cause in skip:
+            continue
+        say(cause)
+        ext = EXTENSIONS[cause]
+        try:
+            prob = _problem(base_problem, fe, ext, base_pred, top)
+            f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
+        except (InternalError, ValueError, ArithmeticError) as exc:
+            # one cause that cannot be set up is counted and reported, not fatal
+            exts[cause] = (ext, FitCandidate((cause,), base_problem, None, [],
+                                             f"its fit failed: {exc}"))
+            continue
+        why = cold_failure(fe, f, ext)
+        if why:                  # counted and reported; the judge goes on with the others
+            exts[cause] = (ext, FitCandidate((cause,), prob, None, s, why))
+            continue
+        c = FitCandidate((cause,), prob, f, s)
+        if f is not None and _inactive(ext, f):
+            c.excluded = "its effect fitted to zero (the base model)"
+        exts[cause] = (ext, c)
+        singles.append(c)
+    ic = {c.name: c.fit.chi2 + 2 * c.fit.k + judge.T_CAUSE
+          for c in singles if c.fit is not None and not c.excluded}
+    base_ic = bfit.chi2 + 2 * bfit.k
+    # a pair (one more parameter, one more cause) has IC >= 2 (k + 1) + 2 T: when the
+    # best single is already below that, no pair can outweigh it, so none is fitted
+    best_single = min(ic.values(), default=math.inf)
+    if ic and best_single > 2 * (bfit.k + 2) + 2 * judge.T_CAUSE:
+        first = min(ic, key=ic.get)
+        for other in sorted(ic, key=ic.get):
+            if other == first or ic[other] >= base_ic:
+                continue
+            say(f"{first} + {other}")
+            pair = Combined(EXTENSIONS[first], EXTENSIONS[other])
+            prob = _problem(base_problem, fe, pair, base_pred, top)
+            f, s = _fit_extension(prob, pair, exts[first][1].fit.values,
+                                  [exts[first][1].fit.values["chi"]])
+            why = cold_failure(fe, f, pair)
+            exts[pair.cause] = (pair, FitCandidate((first, other), prob, None if why else f,
+                                                   s, why))
+    judged = judge_extensions(base, [c for _, c in exts.values()], jn, progress=say)
+    return {"fe": fe, "noise": noise, "judge_noise": jn, "base": base, "extensions": exts,
+            "judged": judged, "untested": skip, "chosen": judged["selection"].best,
+            "estimator_start": estimated[1] or "used"}
+
+
+def chosen_model(s: dict):
+    """(extension or None, FitCandidate) of the selected (or closest) candidate."""
+    name = s["chosen"]
+    if name == "none":
+        return None, s["base"]
+    return s["extensions"][name]
