@@ -246,18 +246,21 @@ def check_paper_tables() -> list[TableCheck]:
         All checks, passing or not; ``[c for c in checks if not c.ok]`` are the
         disagreements beyond printed rounding.
     """
-    from joints.describing import kappa1
-
     t = paper_tables()
-    t3, t4, t5, t6 = t["table3"], t["table4"], t["table5"], t["table6"]
+    return (_measured_checks(t) + _cumulative_checks(t) + _error_column_checks(t)
+            + _estimate_checks(t) + _model_checks(t))
+
+
+def _pair(col: PrintedColumn, i: int) -> tuple[float, float]:
+    """Entry ``i`` of a printed column as (value, half-width)."""
+    return col.value[i], col.half_width[i]
+
+
+def _measured_checks(t: dict[str, dict[str, PrintedColumn]]) -> list[TableCheck]:
+    """Tables 3 / 5 against the successive differences of Tables 4 / 6."""
+    m3, m4 = t["table3"]["measured_rad2_s2"], t["table4"]["measured_rad2_s2"]
+    m5, m6 = t["table5"]["measured_percent"], t["table6"]["measured_percent"]
     checks: list[TableCheck] = []
-
-    def pair(col, i):
-        return col.value[i], col.half_width[i]
-
-    # -- measured: differences
-    m3, m4 = t3["measured_rad2_s2"], t4["measured_rad2_s2"]
-    m5, m6 = t5["measured_percent"], t6["measured_percent"]
     for i in range(9):
         a, b = i + 1, i + 2
         checks.append(TableCheck(
@@ -268,11 +271,18 @@ def check_paper_tables() -> list[TableCheck]:
             "measured", f"Table 5 vs Table 6, level {a}->{b}", "growth of zeta [%]",
             m5.value[i], m6.value[i + 1] - m6.value[i],
             m5.half_width[i] + m6.half_width[i] + m6.half_width[i + 1]))
-    # -- measured: cumulative
+    return checks
+
+
+def _cumulative_checks(t: dict[str, dict[str, PrintedColumn]]) -> list[TableCheck]:
+    """Tables 4 / 6 against level 1 and the cumulative sums of Tables 3 / 5."""
+    m3, m4 = t["table3"]["measured_rad2_s2"], t["table4"]["measured_rad2_s2"]
+    m5, m6 = t["table5"]["measured_percent"], t["table6"]["measured_percent"]
     cum3 = np.cumsum(m3.value)
     cum3w = np.cumsum(m3.half_width)
     cum5 = np.cumsum(m5.value)
     cum5w = np.cumsum(m5.half_width)
+    checks: list[TableCheck] = []
     for i in range(1, 10):
         checks.append(TableCheck(
             "measured", f"Table 4 level {i + 1} vs Table 4 level 1 - sum of Table 3",
@@ -282,25 +292,34 @@ def check_paper_tables() -> list[TableCheck]:
             "measured", f"Table 6 level {i + 1} vs Table 6 level 1 + sum of Table 5",
             "zeta [%]", m6.value[i], m6.value[0] + cum5[i - 1],
             m6.half_width[i] + m6.half_width[0] + cum5w[i - 1]))
+    return checks
 
-    # -- error columns (paper: error = (estimated - measured)/measured in percent)
+
+def _error_column_checks(t: dict[str, dict[str, PrintedColumn]]) -> list[TableCheck]:
+    """Each printed error percent against ``100 (estimated - measured)/measured``."""
+    checks: list[TableCheck] = []
     for name, tab, meas, est in (
-            ("Table 3", t3, "measured_rad2_s2", "paper_estimated_rad2_s2"),
-            ("Table 4", t4, "measured_rad2_s2", "paper_estimated_rad2_s2"),
-            ("Table 5", t5, "measured_percent", "paper_estimated_percent"),
-            ("Table 6", t6, "measured_percent", "paper_estimated_percent")):
+            ("Table 3", t["table3"], "measured_rad2_s2", "paper_estimated_rad2_s2"),
+            ("Table 4", t["table4"], "measured_rad2_s2", "paper_estimated_rad2_s2"),
+            ("Table 5", t["table5"], "measured_percent", "paper_estimated_percent"),
+            ("Table 6", t["table6"], "measured_percent", "paper_estimated_percent")):
         err = tab["paper_error_percent"]
         for i in np.flatnonzero(np.isfinite(err.value)):
-            value, width = _ratio_percent(pair(tab[est], i), pair(tab[meas], i))
+            value, width = _ratio_percent(_pair(tab[est], i), _pair(tab[meas], i))
             row = (f"level {i + 1}" if name in ("Table 4", "Table 6")
                    else f"level {i + 1}->{i + 2}")
             checks.append(TableCheck(
                 "error column", f"{name} error column, {row}", "error [%]",
                 err.value[i], value, err.half_width[i] + width))
+    return checks
 
-    # -- estimates: differences vs differences of absolute estimates
-    e3, e4 = t3["paper_estimated_rad2_s2"], t4["paper_estimated_rad2_s2"]
-    e5, e6 = t5["paper_estimated_percent"], t6["paper_estimated_percent"]
+
+def _estimate_checks(t: dict[str, dict[str, PrintedColumn]]) -> list[TableCheck]:
+    """Estimated differences against the differences of the estimated absolute values."""
+    m4, m6 = t["table4"]["measured_rad2_s2"], t["table6"]["measured_percent"]
+    e3, e4 = t["table3"]["paper_estimated_rad2_s2"], t["table4"]["paper_estimated_rad2_s2"]
+    e5, e6 = t["table5"]["paper_estimated_percent"], t["table6"]["paper_estimated_percent"]
+    checks: list[TableCheck] = []
     for i in range(6, 9):  # pairs 7->8, 8->9, 9->10
         base4 = (m4 if i == 6 else e4)
         base6 = (m6 if i == 6 else e6)
@@ -315,8 +334,15 @@ def check_paper_tables() -> list[TableCheck]:
             f"- {label} {i + 1})", "growth of zeta [%]",
             e5.value[i], e6.value[i + 1] - base6.value[i],
             e5.half_width[i] + e6.half_width[i + 1] + base6.half_width[i]))
+    return checks
 
-    # -- model: geometric sequences with ratio z**(chi+1)
+
+def _model_checks(t: dict[str, dict[str, PrintedColumn]]) -> list[TableCheck]:
+    """Geometric sequences of ratio ``z**(chi+1)`` and the published ``|kappa1| B``."""
+    from joints.describing import kappa1
+
+    e3, e5 = t["table3"]["paper_estimated_rad2_s2"], t["table5"]["paper_estimated_percent"]
+    checks: list[TableCheck] = []
     ratio = VOLTAGE_RATIO ** (PUBLISHED["chi"] + 1.0)
     for name, col in (("Table 3", e3), ("Table 5", e5)):
         for i in (7, 8):

@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,15 +29,19 @@ from cases.double_beam.joint_setup import (
     mode_weights,
     nonlinear_model,
 )
-from cases.double_beam.model import build_double_beam
+from cases.double_beam.model import DoubleBeamModel, build_double_beam
 from cases.double_beam.protocols import protocol_comparison
 from cases.double_beam.report import DoubleBeamReport
 from cases.double_beam.settings import DoubleBeamStudy, measured_levels
-from ident.levels import identify_levels
+from fe.reduction import JointBank, ReducedModel
+from ident.levels import LevelIdentification, identify_levels
 from ident.measured import MeasuredData
-from ident.modal_filter import modal_filter_levels
+from ident.modal_filter import ModalFilterLevels, modal_filter_levels
 from inverse.estimate import METHODS, estimate
 from inverse.iwan_modal import b_tilde, r_tilde
+
+if TYPE_CHECKING:
+    from runs.campaign import CampaignResult
 
 __all__ = ["identify_campaign", "simulate_study"]
 
@@ -93,6 +99,96 @@ def _campaign(red, bank, camp, store, progress, workers, executor):
     return res, store_dir
 
 
+@dataclass(frozen=True)
+class _Simulation:
+    """What the steps of one simulation share: the study, the case, its joint and nonlinear
+    model, and where and how the campaigns run."""
+
+    study: DoubleBeamStudy
+    model: DoubleBeamModel
+    data: MeasuredData
+    setup: JointSetup
+    red: ReducedModel
+    bank: JointBank
+    store: object
+    progress: bool
+    workers: int
+    executor: object
+
+    def campaign(self, protocol: str) -> tuple:
+        """Run (or resume) the study's campaign under ``protocol``: (result, store dir)."""
+        return _campaign(self.red, self.bank,
+                         level_campaign(self.model, self.setup, self.study, protocol),
+                         self.store, self.progress, self.workers, self.executor)
+
+
+def _identify(sim: _Simulation, res: CampaignResult, phi: np.ndarray,
+              weights: np.ndarray) -> tuple[LevelIdentification, ModalFilterLevels]:
+    """:func:`identify_campaign` on ``res`` under a progress bar when asked for."""
+    bar = None
+    if sim.progress:
+        from tqdm import tqdm
+        bar = tqdm(total=sim.study.n_levels, desc="identify", unit="level", leave=False)
+    try:
+        return identify_campaign(sim.model, sim.setup, sim.study, res, phi, weights,
+                                 progress=bar)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _hb_comparison(sim: _Simulation, protocol: str, ids: tuple, res: CampaignResult,
+                   phi: np.ndarray, weights: np.ndarray) -> dict:
+    """The harmonic-balance campaign of the same lines, identified, beside ``res`` (the
+    ``protocol`` campaign) and its identification ``ids``."""
+    hb_res, _ = sim.campaign("hb")
+    hb_ids = identify_campaign(sim.model, sim.setup, sim.study, hb_res, phi, weights)
+    proto = level_campaign(sim.model, sim.setup, sim.study, protocol).protocol
+    steps = [proto.steps_for(float(a.max()), float(sim.bank.slip_limit.max()))
+             for a in hb_res.slip_amplitude]
+    return protocol_comparison(sim.data.level, ids, hb_ids, res, hb_res, steps)
+
+
+def _check_identified(sim: _Simulation, ident: LevelIdentification) -> None:
+    """Raise RuntimeError naming the simulated levels where no mode was identified."""
+    if not np.all(np.isfinite(ident.omega2)):
+        bad = sim.data.level[~np.isfinite(ident.omega2)]
+        raise RuntimeError(f"no mode identified near "
+                           f"{sim.setup.omega_n / (2 * math.pi):.1f} Hz at "
+                           f"simulated level(s) {', '.join(map(str, bad))}")
+
+
+def _as_data(sim: _Simulation, ident: LevelIdentification, weights: np.ndarray,
+             om2: np.ndarray, ze: np.ndarray, slip: np.ndarray, source: str) -> MeasuredData:
+    """Simulated modal data per level as a measured-data table (``source``: its route)."""
+    data, setup = sim.data, sim.setup
+    return MeasuredData(
+        level=data.level, excitation=data.excitation, omega2=om2, zeta=ze,
+        mode=data.mode, run_order=data.run_order,
+        response_amplitude=ident.response if source == "lscf" else None,
+        extra={"x_force_N": setup.force, "x_joint_slip_eff_m": slip @ weights / weights.sum(),
+               "x_slip_over_phi_max": np.nanmax(slip, axis=1) / setup.phi_max},
+        source=f"simulated double beam ({source})")
+
+
+def _estimates(sim: _Simulation, ident: LevelIdentification, mf: ModalFilterLevels,
+               simulated: MeasuredData, filtered: MeasuredData, phi: np.ndarray,
+               weights: np.ndarray) -> tuple:
+    """Estimates on the measured, simulated (LSCF) and modal-filter data, and the
+    force-scale rows: ``(est_m, est_s, est_f, fs_rows)``."""
+    study, model, setup = sim.study, sim.model, sim.setup
+    est_m = _estimate_all(sim.data, study, model, ident.slip_eff, ident.slip[0], phi,
+                          setup.shares)
+    est_s = _estimate_all(simulated, study, model, ident.slip_eff, ident.slip[0], phi,
+                          setup.shares)
+    eff_mf = mf.slip @ weights / weights.sum()
+    est_f = (_estimate_all(filtered, study, model, eff_mf, mf.slip[0], phi, setup.shares)
+             if np.all(np.isfinite(mf.zeta)) else {})
+    top = float(np.nanmax(ident.slip[-1]))
+    fs_rows = force_scale_dependence(model, sim.data, study, top_slip=top)
+    return est_m, est_s, est_f, fs_rows
+
+
 def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
                    workers: int = 1, model=None, executor=None, protocol: str = "hb",
                    calibration=None) -> DoubleBeamReport:
@@ -131,62 +227,28 @@ def simulate_study(study: DoubleBeamStudy, store=None, progress: bool = True,
     data = measured_levels(study)
     setup = joint_setup(model, data, study)
     red, bank = nonlinear_model(model, setup, study)
+    sim = _Simulation(study, model, data, setup, red, bank, store, progress, workers, executor)
     timings["setup"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    res, store_dir = _campaign(red, bank, level_campaign(model, setup, study, protocol), store,
-                               progress, workers, executor)
+    res, store_dir = sim.campaign(protocol)
     timings["campaign"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     phi, weights = mode_weights(model, setup)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=study.n_levels, desc="identify", unit="level", leave=False)
-    try:
-        ident, mf = identify_campaign(model, setup, study, res, phi, weights, progress=bar)
-    finally:
-        if bar is not None:
-            bar.close()
+    ident, mf = _identify(sim, res, phi, weights)
     comparison = None
     if protocol != "hb":
         t1 = time.perf_counter()
-        hb_res, _ = _campaign(red, bank, level_campaign(model, setup, study, "hb"), store,
-                              progress, workers, executor)
-        hb_ids = identify_campaign(model, setup, study, hb_res, phi, weights)
-        proto = level_campaign(model, setup, study, protocol).protocol
-        steps = [proto.steps_for(float(a.max()), float(bank.slip_limit.max()))
-                 for a in hb_res.slip_amplitude]
-        comparison = protocol_comparison(data.level, (ident, mf), hb_ids, res, hb_res, steps)
+        comparison = _hb_comparison(sim, protocol, (ident, mf), res, phi, weights)
         timings["campaign_hb_check"] = time.perf_counter() - t1
-    if not np.all(np.isfinite(ident.omega2)):
-        bad = data.level[~np.isfinite(ident.omega2)]
-        raise RuntimeError(f"no mode identified near {setup.omega_n / (2 * math.pi):.1f} Hz at "
-                           f"simulated level(s) {', '.join(map(str, bad))}")
-
-    def as_data(om2, ze, slip, source):
-        return MeasuredData(
-            level=data.level, excitation=data.excitation, omega2=om2, zeta=ze,
-            mode=data.mode, run_order=data.run_order,
-            response_amplitude=ident.response if source == "lscf" else None,
-            extra={"x_force_N": setup.force, "x_joint_slip_eff_m": slip @ weights / weights.sum(),
-                   "x_slip_over_phi_max": np.nanmax(slip, axis=1) / setup.phi_max},
-            source=f"simulated double beam ({source})")
-
-    simulated = as_data(ident.omega2, ident.zeta, ident.slip, "lscf")
-    filtered = as_data(mf.omega2, mf.zeta, mf.slip, "modal filter")
+    _check_identified(sim, ident)
+    simulated = _as_data(sim, ident, weights, ident.omega2, ident.zeta, ident.slip, "lscf")
+    filtered = _as_data(sim, ident, weights, mf.omega2, mf.zeta, mf.slip, "modal filter")
     timings["identification"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    est_m = _estimate_all(data, study, model, ident.slip_eff, ident.slip[0], phi, setup.shares)
-    est_s = _estimate_all(simulated, study, model, ident.slip_eff, ident.slip[0], phi,
-                          setup.shares)
-    eff_mf = mf.slip @ weights / weights.sum()
-    est_f = (_estimate_all(filtered, study, model, eff_mf, mf.slip[0], phi, setup.shares)
-             if np.all(np.isfinite(mf.zeta)) else {})
-    top = float(np.nanmax(ident.slip[-1]))
-    fs_rows = force_scale_dependence(model, data, study, top_slip=top)
+    est_m, est_s, est_f, fs_rows = _estimates(sim, ident, mf, simulated, filtered, phi, weights)
     timings["estimation"] = time.perf_counter() - t0
     return DoubleBeamReport(study=study, setup=setup, measured=data, simulated=simulated,
                             campaign=res, identification=ident, modal_filter=mf,
