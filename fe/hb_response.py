@@ -93,74 +93,20 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
         raise ValueError(f"the drive or the response DOF does not see basis vector {k}")
     warm = guess is not None and guess.force is not None and guess.force.shape == A.shape \
         and guess.element_amplitude.shape[1] == b.ny - b.nj
-    if warm:
-        ratio = A / np.abs(guess.response)
-        F0 = guess.force * ratio
-        w, lnF = guess.omega.copy(), np.log(F0)
-        Y = np.concatenate([guess.slip, guess.element_harmonics], axis=1) * ratio[:, None]
-    else:     # the phase resonance at the linear mode's force for |x| = A
-        w = np.sqrt(b.a * b.k[k])
-        F = A * np.maximum(b.c[k] * w, 1e-4 * w * w) / abs(c[k] * b.p[k])
-        start = resonance_levels(model, joints, load, F, k, scale=scale, elements=elements)
-        w, lnF, F0 = start.omega, np.log(F), F
-        Y = np.concatenate([start.slip, start.element_harmonics], axis=1)
-    its, upd = 0, None
-
-    def state(w, lnF, Y):
-        """Harmonics and the two equations (phase, amplitude) at ``(w, ln F)``; the
-        last Newton step's relative update per level in ``upd``."""
-        nonlocal its, upd
-        b.F = np.exp(lnF)
-        Y, N, Dinv, it, upd = b.solve(w, Y, 0.01 * tol, max_newton)
-        its += it
-        q = b.response(N, Dinv)
-        eq = np.stack([(b.p[k] * b.F / q[:, k]).real / w ** 2, np.log(np.abs(q @ c) / A)], 1)
-        return Y, q, eq
-
-    Y, q, eq = state(w, lnF, Y)
-    upd_at = upd
-    miss0 = eq[:, 1].copy()
+    w, lnF, F0, Y = _start(model, joints, load, b, A, c, k, scale, elements,
+                           guess if warm else None)
+    held = _Held(b, k, c, A, tol, max_newton)
+    x = _Iterate(w, lnF, *held.state(w, lnF, Y))
+    miss0 = x.eq[:, 1].copy()
     J = guess.jacobian if warm and guess.jacobian is not None else None
-    last = np.inf
-    for steps in range(1, max_steps + 1):
-        worst = np.abs(eq).max()
-        if worst <= tol:
-            break
-        if J is None or worst > 0.1 * last:
-            # Newton on (ln w, ln F), the 2 x 2 Jacobian per level by forward
-            # differences; kept (a chord step) while the residual falls tenfold a step
-            J = np.empty((A.size, 2, 2))
-            J[:, :, 0] = (state(w * (1.0 + FD), lnF, Y)[2] - eq) / FD
-            J[:, :, 1] = (state(w, lnF + FD, Y)[2] - eq) / FD
-        last = worst
-        d = -np.linalg.solve(J, eq[..., None])[..., 0]
-        d[:, 0] = np.clip(d[:, 0], -0.05, 0.05)
-        d[:, 1] = np.clip(d[:, 1], -MAX_LOG_STEP, MAX_LOG_STEP)
-        norm, lam = np.linalg.norm(eq, axis=1), np.ones(A.size)
-        for _ in range(MAX_HALVINGS):       # halve the step where |eq| does not fall
-            Yt, qt, et = state(w * np.exp(lam * d[:, 0]), lnF + lam * d[:, 1],
-                               Y * np.exp(lam * d[:, 1])[:, None])
-            upd_at = upd
-            bad = (np.linalg.norm(et, axis=1) > (1.0 - 1e-4 * lam) * norm) & (norm > tol)
-            if not bad.any():
-                break
-            lam = np.where(bad, 0.5 * lam, lam)
-        w, lnF, Y, q, eq = w * np.exp(lam * d[:, 0]), lnF + lam * d[:, 1], Yt, qt, et
-    done = np.all(np.abs(eq) <= tol, axis=1)
-    F = b.F.copy()
-    Ya = np.abs(Y)
-    Dk = b.p[k] * F / q[:, k]
-    out = ResponseLevels(omega=w, omega2=w ** 2, zeta=Dk.imag / (2.0 * w ** 2),
-                         slip=Y[:, :b.nj], slip_amplitude=Ya[:, :b.nj],
-                         element_amplitude=Ya[:, b.nj:], q=q, secant_steps=steps,
-                         newton_iterations=its, element_harmonics=Y[:, b.nj:],
-                         force=F, response=q @ c, jacobian=J,
-                         fallbacks=[stall_words(u, 0.01 * tol) for u in upd_at])
+    J, steps, upd_at = _newton(held, x, J, max_steps)
+    done = np.all(np.abs(x.eq) <= tol, axis=1)
+    out = _levels(held, x, J, steps, upd_at)
     if not done.all():     # deep macro slip: the bracketed secant on ln F there
         i = np.flatnonzero(~done)
         # start from the force of the Newton iterate or of the start, whichever held
         # the amplitude better
-        start = np.where(np.abs(eq[i, 1]) < np.abs(miss0[i]), F[i], F0[i])
+        start = np.where(np.abs(x.eq[i, 1]) < np.abs(miss0[i]), out.force[i], F0[i])
         sub = _bracketed(model, joints, load, A[i], c, k, b.a[i], elements, tol, start)
         for name in PER_LEVEL:
             getattr(out, name)[i] = getattr(sub, name)
@@ -169,6 +115,118 @@ def response_levels(model: ReducedModel, joints, load, amplitudes, response_row,
         out.secant_steps += sub.secant_steps
         out.newton_iterations += sub.newton_iterations
     return out
+
+
+def _start(model: ReducedModel, joints, load, b: _Balance, A: np.ndarray, c: np.ndarray,
+           k: int, scale, elements, guess: ResponseLevels | None
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The first iterate ``(w, ln F, F0, Y)``: the guess scaled to the held amplitudes,
+    or the phase resonance at the linear mode's force for ``|x| = A``."""
+    if guess is not None:
+        ratio = A / np.abs(guess.response)
+        F0 = guess.force * ratio
+        w, lnF = guess.omega.copy(), np.log(F0)
+        Y = np.concatenate([guess.slip, guess.element_harmonics], axis=1) * ratio[:, None]
+        return w, lnF, F0, Y
+    w = np.sqrt(b.a * b.k[k])
+    F = A * np.maximum(b.c[k] * w, 1e-4 * w * w) / abs(c[k] * b.p[k])
+    start = resonance_levels(model, joints, load, F, k, scale=scale, elements=elements)
+    Y = np.concatenate([start.slip, start.element_harmonics], axis=1)
+    return start.omega, np.log(F), F, Y
+
+
+@dataclass
+class _Held:
+    """The balance at held amplitudes ``A`` of ``x = c . q`` and the Newton iterations
+    its solves took (``its``), the last solve's relative update per level (``upd``)."""
+
+    b: _Balance
+    k: int
+    c: np.ndarray
+    A: np.ndarray
+    tol: float
+    max_newton: int
+    its: int = 0
+    upd: np.ndarray | None = None
+
+    def state(self, w: np.ndarray, lnF: np.ndarray, Y: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Harmonics, response and the two equations (phase, amplitude) at ``(w, ln F)``."""
+        b, k = self.b, self.k
+        b.F = np.exp(lnF)
+        Y, N, Dinv, it, self.upd = b.solve(w, Y, 0.01 * self.tol, self.max_newton)
+        self.its += it
+        q = b.response(N, Dinv)
+        eq = np.stack([(b.p[k] * b.F / q[:, k]).real / w ** 2,
+                       np.log(np.abs(q @ self.c) / self.A)], 1)
+        return Y, q, eq
+
+
+@dataclass
+class _Iterate:
+    """One Newton iterate on ``(ln w, ln F)``: ``w``, ``ln F``, harmonics ``Y``, response
+    ``q`` and the equations ``eq`` (L, 2)."""
+
+    w: np.ndarray
+    lnF: np.ndarray
+    Y: np.ndarray
+    q: np.ndarray
+    eq: np.ndarray
+
+
+def _newton(held: _Held, x: _Iterate, J: np.ndarray | None, max_steps: int
+            ) -> tuple[np.ndarray | None, int, np.ndarray]:
+    """Newton on ``(ln w, ln F)`` from ``x`` (updated in place); returns the last
+    Jacobian, the steps taken and the relative updates of the accepted solves."""
+    tol, upd_at, last = held.tol, held.upd, np.inf
+    for steps in range(1, max_steps + 1):
+        worst = np.abs(x.eq).max()
+        if worst <= tol:
+            break
+        if J is None or worst > 0.1 * last:
+            # Newton on (ln w, ln F), the 2 x 2 Jacobian per level by forward
+            # differences; kept (a chord step) while the residual falls tenfold a step
+            J = np.empty((held.A.size, 2, 2))
+            J[:, :, 0] = (held.state(x.w * (1.0 + FD), x.lnF, x.Y)[2] - x.eq) / FD
+            J[:, :, 1] = (held.state(x.w, x.lnF + FD, x.Y)[2] - x.eq) / FD
+        last = worst
+        d = -np.linalg.solve(J, x.eq[..., None])[..., 0]
+        d[:, 0] = np.clip(d[:, 0], -0.05, 0.05)
+        d[:, 1] = np.clip(d[:, 1], -MAX_LOG_STEP, MAX_LOG_STEP)
+        upd_at = _line_search(held, x, d)
+    return J, steps, upd_at
+
+
+def _line_search(held: _Held, x: _Iterate, d: np.ndarray) -> np.ndarray:
+    """Take step ``d`` from ``x`` (in place), halved where ``|eq|`` does not fall;
+    returns the relative updates of the accepted solve."""
+    norm, lam = np.linalg.norm(x.eq, axis=1), np.ones(held.A.size)
+    for _ in range(MAX_HALVINGS):       # halve the step where |eq| does not fall
+        Yt, qt, et = held.state(x.w * np.exp(lam * d[:, 0]), x.lnF + lam * d[:, 1],
+                                x.Y * np.exp(lam * d[:, 1])[:, None])
+        upd_at = held.upd
+        bad = (np.linalg.norm(et, axis=1) > (1.0 - 1e-4 * lam) * norm) & (norm > held.tol)
+        if not bad.any():
+            break
+        lam = np.where(bad, 0.5 * lam, lam)
+    x.w, x.lnF, x.Y, x.q, x.eq = (x.w * np.exp(lam * d[:, 0]), x.lnF + lam * d[:, 1],
+                                  Yt, qt, et)
+    return upd_at
+
+
+def _levels(held: _Held, x: _Iterate, J: np.ndarray | None, steps: int,
+            upd_at: np.ndarray) -> ResponseLevels:
+    """The result of the Newton iteration at its last iterate ``x``."""
+    b, k, w, Y, q = held.b, held.k, x.w, x.Y, x.q
+    F = b.F.copy()
+    Ya = np.abs(Y)
+    Dk = b.p[k] * F / q[:, k]
+    return ResponseLevels(omega=w, omega2=w ** 2, zeta=Dk.imag / (2.0 * w ** 2),
+                          slip=Y[:, :b.nj], slip_amplitude=Ya[:, :b.nj],
+                          element_amplitude=Ya[:, b.nj:], q=q, secant_steps=steps,
+                          newton_iterations=held.its, element_harmonics=Y[:, b.nj:],
+                          force=F, response=q @ held.c, jacobian=J,
+                          fallbacks=[stall_words(u, 0.01 * held.tol) for u in upd_at])
 
 
 def _bracketed(model, joints, load, A, c, k, scale, elements, tol, F, max_steps=60):

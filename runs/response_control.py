@@ -71,39 +71,71 @@ def solve_response_controlled(model: ReducedModel, joints, load, omega: float, c
         raise ValueError(f"held amplitude must be > 0, got {amplitude!r}")
     h = np.asarray(joints.harmonics)
     op = HBOperator(model, load, omega, None, harmonics=h)
-    nc, nj = op.nc, op.nj
     i1 = int(np.flatnonzero(h == 1)[0])
     x_lin = complex(control @ op.Xp[i1])
-    x_g = control @ op.XG[i1]                                    # (nj,)
-    eye = np.eye(nc * nj)
+    bal = _ControlledBalance(op, joints, i1, x_lin, control @ op.XG[i1], A,
+                             max(np.abs(op.y_lin).max() * A / abs(x_lin), 1e-300))
+    y, F = bal.start(guess, h.size)
+    try:
+        z, it, upd, _ = damped_newton(bal.balance, np.append(y, F), tol, max_iter, bal.scale,
+                                      relative_update=bal.relative_update)
+    except SteadyStateError as exc:
+        raise SteadyStateError(f"{omega / (2 * np.pi):.6g} Hz", exc.reason,
+                               solver="response-controlled balance") from None
+    return bal.solution(omega, h, z, it, upd, tol)
 
-    def evaluate(y):
-        Gh, Jg, amp = joints(y.reshape(nc, nj))
+
+@dataclass
+class _ControlledBalance:
+    """The condensed balance at one line with the force ``F`` as one more unknown and
+    the held amplitude ``A`` of ``X_d`` as one more equation (module docstring);
+    ``x_g = (D_1^{-1} G^T)_d``, ``scale`` the slip scale of the Newton steps."""
+
+    op: HBOperator
+    joints: object
+    i1: int
+    x_lin: complex
+    x_g: np.ndarray
+    A: float
+    scale: float
+    eye: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        """The identity of the slip block."""
+        self.eye = np.eye(self.op.nc * self.op.nj)
+
+    def evaluate(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, complex]:
+        """Joint harmonics, their Jacobian, slip amplitudes and the first harmonic."""
+        i1 = self.i1
+        Gh, Jg, amp = self.joints(y.reshape(self.op.nc, self.op.nj))
         return Gh, Jg, amp, Gh[2 * i1] + 1j * Gh[2 * i1 + 1]
 
-    if guess is None:
-        F = A / abs(x_lin)
-        y = F * op.y_lin
-    else:
-        g = np.asarray(guess, dtype=complex).reshape(h.size, nj)
-        y = np.empty((nc, nj))
+    def start(self, guess, n_h: int) -> tuple[np.ndarray, float]:
+        """The first ``(y, F)``: the guess's slips with their least-squares force, or
+        the linear response scaled to the held amplitude."""
+        op = self.op
+        if guess is None:
+            F = self.A / abs(self.x_lin)
+            return F * op.y_lin, F
+        g = np.asarray(guess, dtype=complex).reshape(n_h, op.nj)
+        y = np.empty((op.nc, op.nj))
         y[0::2], y[1::2] = g.real, g.imag
         y = y.reshape(-1)
-        Gh = evaluate(y)[0]
-        F = float(op.y_lin @ (y + op.Rr @ Gh.reshape(-1)) / (op.y_lin @ op.y_lin))
-    scale = max(np.abs(op.y_lin).max() * A / abs(x_lin), 1e-300)
-    n = nc * nj
+        Gh = self.evaluate(y)[0]
+        return y, float(op.y_lin @ (y + op.Rr @ Gh.reshape(-1)) / (op.y_lin @ op.y_lin))
 
-    def balance(z):
+    def balance(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual and exact Jacobian in ``z = [y, F]`` (module docstring)."""
+        op, i1, A, x_lin, x_g = self.op, self.i1, self.A, self.x_lin, self.x_g
+        n = op.nc * op.nj
         y, F = z[:-1], z[-1]
-        Gh, Jg, amp, N1 = evaluate(y)
+        Gh, Jg, amp, N1 = self.evaluate(y)
         X = F * x_lin - x_g @ N1
         res = np.empty(n + 1)
         res[:-1] = y - F * op.y_lin + op.Rr @ Gh.reshape(-1)
         res[-1] = 0.5 * (abs(X) ** 2 / A ** 2 - 1.0)
         Jac = np.empty((n + 1, n + 1))
-        Jac[:-1, :-1] = eye + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(n, n)
+        Jac[:-1, :-1] = self.eye + np.einsum("cjel,led->cjdl", op.Rr4, Jg).reshape(n, n)
         Jac[:-1, -1] = -op.y_lin
         dN1 = Jg[:, 2 * i1, :] + 1j * Jg[:, 2 * i1 + 1, :]           # (nj, nc): dN1_l/dY[d, l]
         dX = -(x_g[:, None] * dN1).T                                   # (nc, nj)
@@ -111,27 +143,27 @@ def solve_response_controlled(model: ReducedModel, joints, load, omega: float, c
         Jac[-1, -1] = (np.conj(X) * x_lin).real / A ** 2
         return res, Jac
 
-    def relative_update(z, d):
-        return max(np.abs(d[:-1]).max() / max(np.abs(z[:-1]).max(), scale * 1e-12),
+    def relative_update(self, z: np.ndarray, d: np.ndarray) -> float:
+        """The Newton step's size relative to the slips and to the force."""
+        return max(np.abs(d[:-1]).max() / max(np.abs(z[:-1]).max(), self.scale * 1e-12),
                    abs(d[-1]) / max(abs(z[-1]), 1e-300))
 
-    try:
-        z, it, upd, _ = damped_newton(balance, np.append(y, F), tol, max_iter, scale,
-                                      relative_update=relative_update)
-    except SteadyStateError as exc:
-        raise SteadyStateError(f"{omega / (2 * np.pi):.6g} Hz", exc.reason,
-                               solver="response-controlled balance") from None
-    y, F = z[:-1], float(z[-1])
-    if F < 0:              # the mirror solution (odd joints): same receptance, F > 0
-        y, F = -y, -F
-    Gh, _, amp, _ = evaluate(y)
-    Y = y.reshape(nc, nj)
-    S, Nh = Y[0::2] + 1j * Y[1::2], Gh[0::2] + 1j * Gh[1::2]
-    q = -np.einsum("hrj,hj->hr", op.XG, Nh)
-    q[i1] += F * op.Xp[i1]
-    return ControlledSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Nh, q=q,
-                              slip_amplitude=amp, iterations=it, residual=float(upd),
-                              fallback=stall_words(upd, tol), force=float(F))
+    def solution(self, omega: float, h: np.ndarray, z: np.ndarray, it: int, upd: float,
+                 tol: float) -> ControlledSolution:
+        """The steady state of the converged ``z = [y, F]`` (``F > 0``)."""
+        op, i1 = self.op, self.i1
+        y, F = z[:-1], float(z[-1])
+        if F < 0:              # the mirror solution (odd joints): same receptance, F > 0
+            y, F = -y, -F
+        Gh, _, amp, _ = self.evaluate(y)
+        Y = y.reshape(op.nc, op.nj)
+        S, Nh = Y[0::2] + 1j * Y[1::2], Gh[0::2] + 1j * Gh[1::2]
+        q = -np.einsum("hrj,hj->hr", op.XG, Nh)
+        q[i1] += F * op.Xp[i1]
+        return ControlledSolution(omega=float(omega), harmonics=h, slip=S, joint_force=Nh,
+                                  q=q, slip_amplitude=amp, iterations=it,
+                                  residual=float(upd), fallback=stall_words(upd, tol),
+                                  force=float(F))
 
 
 @dataclass(frozen=True)

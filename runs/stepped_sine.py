@@ -300,27 +300,14 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
     manifest = None
     if store is not None:
         store = Path(store)
-        manifest = open_manifest(
-            store, digest, {"format": FORMAT, "protocol": campaign.protocol.name,
-                            "force": campaign.force.tolist(),
-                            "frequency_hz": [float(campaign.frequency_hz[0]),
-                                             float(campaign.frequency_hz[-1]), n_lines],
-                            "levels": {}}, "campaign")
-        for key, info in manifest.get("levels", {}).items():
-            path = store / info["file"]
-            if path.exists():
-                results[int(key)] = LevelResult.from_npz(path)
+        manifest, results = _open_store(store, digest, campaign)
     loaded = set(results)
     todo = [lv for lv in range(n_levels) if lv not in results]
 
     def finish(level: int, res: LevelResult) -> None:
         results[level] = res
         if store is not None:
-            name = f"level_{level:02d}.npz"
-            res.to_npz(store / name)
-            manifest["levels"][str(level)] = {"file": name, "force": res.force,
-                                              "elapsed_s": res.elapsed}
-            write_manifest(store, manifest)
+            _save_level(store, manifest, level, res)
         if on_level is not None:
             on_level(level, res)
 
@@ -344,7 +331,41 @@ def run_campaign(model: ReducedModel, bank: JointBank, campaign: Campaign,
     finally:
         if bar is not None:
             bar.close()
-    order = range(n_levels)
+    return _collect(campaign, results, loaded, digest)
+
+
+def _open_store(store: Path, digest: str, campaign: Campaign
+                ) -> tuple[dict, dict[int, LevelResult]]:
+    """The store's manifest (opened, or started for this campaign) and the finished
+    levels it holds."""
+    n_lines = campaign.frequency_hz.size
+    manifest = open_manifest(
+        store, digest, {"format": FORMAT, "protocol": campaign.protocol.name,
+                        "force": campaign.force.tolist(),
+                        "frequency_hz": [float(campaign.frequency_hz[0]),
+                                         float(campaign.frequency_hz[-1]), n_lines],
+                        "levels": {}}, "campaign")
+    results: dict[int, LevelResult] = {}
+    for key, info in manifest.get("levels", {}).items():
+        path = store / info["file"]
+        if path.exists():
+            results[int(key)] = LevelResult.from_npz(path)
+    return manifest, results
+
+
+def _save_level(store: Path, manifest: dict, level: int, res: LevelResult) -> None:
+    """Write a finished level to the store and name it in the manifest."""
+    name = f"level_{level:02d}.npz"
+    res.to_npz(store / name)
+    manifest["levels"][str(level)] = {"file": name, "force": res.force,
+                                      "elapsed_s": res.elapsed}
+    write_manifest(store, manifest)
+
+
+def _collect(campaign: Campaign, results: dict[int, LevelResult], loaded: set[int],
+             digest: str) -> CampaignResult:
+    """The campaign's result: every level's, in level order."""
+    order = range(campaign.force.size)
     return CampaignResult(
         frequency_hz=campaign.frequency_hz, force=campaign.force,
         receptance=np.array([results[i].receptance for i in order]),

@@ -121,6 +121,41 @@ def render_mode_shape(
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise ValueError(f"render output must be a .png file, got '{path.name}'")
+    scene = _scene(strips, displacements, scale, thickness_scale, deflection_fraction,
+                   subdivisions)
+    backend = select_offscreen_backend()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(window_size))
+    try:
+        plotter.set_background("white")
+        _add_slabs(plotter, scene, scalar_label, show_fibres)
+        if title is None:
+            title = _mode_title(mode_number, frequency_hz, kind)
+        _annotate(plotter, title, scene)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        plotter.screenshot(str(path))
+        used = plotter.render_window.GetClassName() if plotter.render_window else str(backend)
+    finally:
+        plotter.close()
+    return RenderResult(path, scene.scale, scene.t_scale, used, time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
+class _Scene:
+    """The strips' slab fields and the scales they are drawn at (``z_ref``: the
+    stack's mid-height, about which the thickness is exaggerated)."""
+
+    fields: list
+    scale: float
+    t_scale: float
+    z_ref: float
+
+
+def _scene(strips: Sequence[StripGeometry], displacements: Sequence[Mapping],
+           scale: float | None, thickness_scale: float | None, deflection_fraction: float,
+           subdivisions: int) -> _Scene:
+    """The slab fields of every strip and the checked scales of the picture."""
     if len(strips) != len(displacements) or not strips:
         raise ValueError("need one displacement mapping per strip (and at least one strip)")
     fields = [slab_fields(s, d, subdivisions) for s, d in zip(strips, displacements)]
@@ -129,56 +164,54 @@ def render_mode_shape(
     if not (np.isfinite(s_scale) and np.isfinite(t_scale) and t_scale > 0):
         raise ValueError("scale and thickness_scale must be finite, thickness_scale > 0")
     zs = np.concatenate([f.z for f in fields])
-    z_ref = 0.5 * float(zs.min() + zs.max())
+    return _Scene(fields, s_scale, t_scale, 0.5 * float(zs.min() + zs.max()))
 
-    backend = select_offscreen_backend()
-    import pyvista as pv
 
-    deformed = _combined_grid(fields, s_scale, t_scale, z_ref, True)
-    ghost = _combined_grid(fields, s_scale, t_scale, z_ref, False)
+def _add_slabs(plotter, scene: _Scene, scalar_label: str, show_fibres: bool) -> None:
+    """The undeformed ghost, the deformed slabs coloured by displacement magnitude with
+    a scalar bar and, optionally, the fibres on the front face."""
+    args = (scene.fields, scene.scale, scene.t_scale, scene.z_ref)
+    deformed = _combined_grid(*args, True)
+    ghost = _combined_grid(*args, False)
     mags = np.concatenate([g.point_data["displacement"] for g in deformed])
     clim = [0.0, float(mags.max()) if mags.max() > 0 else 1.0]
-
-    plotter = pv.Plotter(off_screen=True, window_size=list(window_size))
-    try:
-        plotter.set_background("white")
-        for g in ghost:
-            plotter.add_mesh(g, color="lightgray", opacity=0.25, show_edges=False,
-                             show_scalar_bar=False)
-        for i, g in enumerate(deformed):
-            plotter.add_mesh(
-                g, scalars="displacement", clim=clim, cmap="viridis", smooth_shading=False,
-                show_scalar_bar=(i == 0),
-                scalar_bar_args=dict(title=scalar_label, color="black", vertical=False,
-                                     position_x=0.3, position_y=0.03, width=0.4, height=0.08,
-                                     fmt="%.2e", title_font_size=16, label_font_size=14),
-            )
-        if show_fibres:
-            plotter.add_mesh(_front_face_lines(fields, s_scale, t_scale, z_ref),
-                             color="black", line_width=1.5)
-        if title is None:
-            parts = []
-            if mode_number is not None:
-                parts.append(f"Mode {mode_number}")
-            if frequency_hz is not None:
-                parts.append(f"{frequency_hz:.2f} Hz")
-            if kind:
-                parts.append(str(kind))
-            title = "   ".join(parts)
-        if title:
-            plotter.add_text(title, position="upper_edge", font_size=14, color="black")
-        plotter.add_text(
-            f"displacement x{s_scale:.3g}, thickness x{t_scale:.3g}", position="lower_left",
-            font_size=9, color="dimgray",
+    for g in ghost:
+        plotter.add_mesh(g, color="lightgray", opacity=0.25, show_edges=False,
+                         show_scalar_bar=False)
+    for i, g in enumerate(deformed):
+        plotter.add_mesh(
+            g, scalars="displacement", clim=clim, cmap="viridis", smooth_shading=False,
+            show_scalar_bar=(i == 0),
+            scalar_bar_args=dict(title=scalar_label, color="black", vertical=False,
+                                 position_x=0.3, position_y=0.03, width=0.4, height=0.08,
+                                 fmt="%.2e", title_font_size=16, label_font_size=14),
         )
-        plotter.view_xz()
-        plotter.camera.azimuth = -15
-        plotter.camera.elevation = 12
-        plotter.reset_camera()
-        plotter.camera.zoom(1.5)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        plotter.screenshot(str(path))
-        used = plotter.render_window.GetClassName() if plotter.render_window else str(backend)
-    finally:
-        plotter.close()
-    return RenderResult(path, s_scale, t_scale, used, time.perf_counter() - t0)
+    if show_fibres:
+        plotter.add_mesh(_front_face_lines(*args), color="black", line_width=1.5)
+
+
+def _mode_title(mode_number: int | None, frequency_hz: float | None, kind: str | None) -> str:
+    """The default title ``Mode N   f Hz   kind`` of the parts given."""
+    parts = []
+    if mode_number is not None:
+        parts.append(f"Mode {mode_number}")
+    if frequency_hz is not None:
+        parts.append(f"{frequency_hz:.2f} Hz")
+    if kind:
+        parts.append(str(kind))
+    return "   ".join(parts)
+
+
+def _annotate(plotter, title: str, scene: _Scene) -> None:
+    """The title, the scales drawn at, and the camera."""
+    if title:
+        plotter.add_text(title, position="upper_edge", font_size=14, color="black")
+    plotter.add_text(
+        f"displacement x{scene.scale:.3g}, thickness x{scene.t_scale:.3g}",
+        position="lower_left", font_size=9, color="dimgray",
+    )
+    plotter.view_xz()
+    plotter.camera.azimuth = -15
+    plotter.camera.elevation = 12
+    plotter.reset_camera()
+    plotter.camera.zoom(1.5)

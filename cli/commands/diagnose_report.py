@@ -36,9 +36,17 @@ def _evidence_rows(r: dict) -> list[str]:
 
 def markdown(r: dict, source: str) -> str:
     """report.md of a diagnosis result (``inverse.diagnose.diagnose``)."""
+    md = _head_md(r, source) + _errors_md(r) + _candidates_md(r) + _limits_md(r)
+    if "fe_check" in r:
+        from cases.double_beam.fe_check import format_fe_check_md
+
+        md += "\n" + format_fe_check_md(r["fe_check"])
+    return md
+
+
+def _head_md(r: dict, source: str) -> str:
+    """The title, the named cause, the summary, any ambiguity and the contradictions."""
     named = r["cause"] + (" + " + " + ".join(r["also"]) if r["also"] else "")
-    params = "\n".join(f"| {k} | {v:.6g} |" for k, v in r["parameters"].items()
-                       if k != "model")
     contra = "\n".join(f"- {c}" for c in r["contradictions"]) or "- none"
     amb = ""
     if r["ambiguity"]:
@@ -46,14 +54,7 @@ def markdown(r: dict, source: str) -> str:
             r["ambiguity"]["between"][1:], r["ambiguity"]["weights"][1:],
             r["ambiguity"]["measurement"]))
         amb = f"\n**Ambiguous** with:\n\n{amb}\n"
-    sep = r["separability"]
-    seps = "\n".join(f"- {p['causes'][0]} from {p['causes'][1]}: {p['measurement']}"
-                     for p in sep["inseparable"])
-    seps += "".join(f"\n- {c} not tested: {why}" for c, why in sep["untestable"].items())
-    warn = "\n".join(f"- {w}" for w in r["data_warnings"]) or "- none"
-    n, ft = r["noise"], r["fit_test"]
-    crit = r["criterion"]
-    md = f"""# Diagnosis of {source}, mode {r['mode']} ({r['control']} control)
+    return f"""# Diagnosis of {source}, mode {r['mode']} ({r['control']} control)
 
 **Cause: `{named}`** (ambiguous: {'yes' if r['ambiguous'] else 'no'})
 
@@ -63,7 +64,14 @@ def markdown(r: dict, source: str) -> str:
 
 {contra}
 
-## Errors on levels the fits did not see
+"""
+
+
+def _errors_md(r: dict) -> str:
+    """The held-out errors of the base and extended models, the noise and the fit test."""
+    n, ft = r["noise"], r["fit_test"]
+    crit = r["criterion"]
+    return f"""## Errors on levels the fits did not see
 
 | | leave one level out | top levels held out |
 | --- | --- | --- |
@@ -76,7 +84,15 @@ Fit of `{ft['model']}`: rms residual {ft['rms_standardized']:.3g} noise standard
 deviations, p = {_g(ft['p_value'], '.2g')} ({ft['test']}); the data count as outside
 their noise below p = {crit['p_unexplained']:g}.
 
-## Parameters of `{r['parameters']['model']}` (fitted to this series)
+"""
+
+
+def _candidates_md(r: dict) -> str:
+    """The fitted parameters of the extended model and the table of every candidate."""
+    params = "\n".join(f"| {k} | {v:.6g} |" for k, v in r["parameters"].items()
+                       if k != "model")
+    crit = r["criterion"]
+    return f"""## Parameters of `{r['parameters']['model']}` (fitted to this series)
 
 | parameter | value |
 | --- | --- |
@@ -96,7 +112,17 @@ candidate's.
 
 ![weights](diagnosis_evidence.png)
 
-## What this test cannot separate
+"""
+
+
+def _limits_md(r: dict) -> str:
+    """What the test cannot separate, the figure of the fits and the data warnings."""
+    sep = r["separability"]
+    seps = "\n".join(f"- {p['causes'][0]} from {p['causes'][1]}: {p['measurement']}"
+                     for p in sep["inseparable"])
+    seps += "".join(f"\n- {c} not tested: {why}" for c, why in sep["untestable"].items())
+    warn = "\n".join(f"- {w}" for w in r["data_warnings"]) or "- none"
+    return f"""## What this test cannot separate
 
 {seps.strip() or '- every pair of testable causes is separable on these levels'}
 
@@ -111,8 +137,3 @@ in units of the noise level (grey band: +/- 2).
 
 {warn}
 """
-    if "fe_check" in r:
-        from cases.double_beam.fe_check import format_fe_check_md
-
-        md += "\n" + format_fe_check_md(r["fe_check"])
-    return md
