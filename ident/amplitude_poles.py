@@ -45,7 +45,7 @@ band, random excitation averages it: neither is refitted.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -132,6 +132,137 @@ def _starts(theta, m):
     return out
 
 
+@dataclass
+class _Level:
+    """What one level's refit holds fixed: the lines (Hz, rad/s), the receptance over
+    its rms per point ``Hn`` (K, P) and that rms ``scale`` (P,), the linear fit's poles
+    ``p0`` (m,) and pseudo-modes, the count of linear parameters per trial."""
+
+    f: np.ndarray
+    w: np.ndarray
+    Hn: np.ndarray
+    scale: np.ndarray
+    p0: np.ndarray
+    pseudo: np.ndarray
+    n_lin: int
+
+    @property
+    def m(self) -> int:
+        """Number of modes refitted."""
+        return self.p0.size
+
+    @property
+    def sigma0(self) -> np.ndarray:
+        """Decay rates of the linear fit's poles, rad/s."""
+        return -self.p0.real
+
+    @property
+    def wd0(self) -> np.ndarray:
+        """Damped frequencies of the linear fit's poles, rad/s."""
+        return self.p0.imag
+
+    @property
+    def n_theta(self) -> int:
+        """Number of nonlinear parameters: 5 per mode."""
+        return 5 * self.m
+
+    @property
+    def dof(self) -> int:
+        """Real residuals less the parameters fitted."""
+        K, P = self.Hn.shape
+        return 2 * K * P - self.n_lin - self.n_theta
+
+    def with_pseudo(self, lines: np.ndarray) -> np.ndarray:
+        """Poles (K, m + pseudo) of every line: ``lines`` (K, m) and the pseudo-modes."""
+        K = self.f.size
+        return np.concatenate([lines, np.broadcast_to(self.pseudo, (K, self.pseudo.size))],
+                              axis=1)
+
+    def misfit(self, theta: np.ndarray, u: np.ndarray, wt: np.ndarray) -> np.ndarray:
+        """The projected residual (real, imaginary) of the poles of ``theta`` at the
+        amplitudes ``u`` (K, m), weights ``wt``."""
+        lines, _ = _line_poles(theta, self.m, self.sigma0, self.wd0, u)
+        r = lsfd(self.f, self.Hn, self.with_pseudo(lines), wt)[2]
+        return np.concatenate([r.real.ravel(), r.imag.ravel()])
+
+
+def _level(f: np.ndarray, H: np.ndarray, modes: list, pseudo) -> _Level:
+    """The fixed data of the refit of ``modes`` to the receptance ``H`` (K, P)."""
+    K, P = H.shape
+    scale = np.sqrt(np.mean(np.abs(H) ** 2, axis=0))
+    p0 = np.array([md.pole for md in modes], complex)
+    pseudo = np.asarray(pseudo, complex)
+    n_lin = P * (2 * (len(modes) + pseudo.size) + 4)
+    return _Level(f, 2 * np.pi * f, H / scale, scale, p0, pseudo, n_lin)
+
+
+@dataclass
+class _Refit:
+    """What the refit found: the poles at the peaks (m,), the residues (P, m) in the
+    receptance's units, the ``theta`` of :func:`_line_poles`, each mode's peak
+    (amplitude, rad/s) and the covariance (2m, 2m) of the poles (:func:`_covariance`)."""
+
+    poles: np.ndarray
+    residues: np.ndarray
+    theta: np.ndarray
+    peaks: list
+    cov: np.ndarray
+
+
+def _fit_pass(lv: _Level, u: np.ndarray, theta: np.ndarray, wt: np.ndarray
+              ) -> tuple[np.ndarray, float, float]:
+    """One fit at the amplitudes ``u``: Levenberg-Marquardt from each start
+    (:func:`_starts`), the best polished; (theta, Newton decrement, chi2)."""
+    def misfit(theta):
+        return lv.misfit(theta, u, wt)
+
+    sol = min((least_squares(misfit, t0, method="lm", x_scale="jac",
+                             max_nfev=200 * (lv.n_theta + 1)) for t0 in _starts(theta, lv.m)),
+              key=lambda r: r.cost if np.isfinite(r.cost) else np.inf)
+    floor = PRECISION ** 2 * float(np.mean(np.abs(wt * lv.Hn) ** 2)) / 2
+    x, dec, chi1, _ = polish(misfit, sol.x, lv.n_lin, floor)
+    return x, dec, chi1
+
+
+def _refit(lv: _Level, force, drive: int) -> _Refit | str:
+    """The passes of the refit (module doc) from the linear fit: the amplitudes of the
+    previous fit, the poles fitted at them, until the amplitudes settle; a note instead
+    when the refit does not converge or its slopes are not significant."""
+    m, f, Hn, scale = lv.m, lv.f, lv.Hn, lv.scale
+    wt = noise_weights(f, Hn, np.concatenate([lv.p0, lv.pseudo]))
+    res_lin, fit_lin, _ = lsfd(f, Hn, np.concatenate([lv.p0, lv.pseudo]), wt)
+    res_lin = res_lin[:, :m] * scale[:, None]
+    w = lv.w
+    force = np.broadcast_to(np.abs(np.asarray(force, float)), f.shape)
+    force = np.exp(np.polyval(np.polyfit(w - w.mean(), np.log(force), 2), w - w.mean()))
+    theta, response = np.zeros(lv.n_theta), fit_lin * scale
+    u_before = None
+    for _ in range(AMPLITUDE_PASSES):     # the linear fit's amplitudes, then the refit's
+        amp = mode_amplitudes(f, response, force, lv.p0, res_lin, drive)
+        peaks = [_peak(w, amp[:, r]) for r in range(m)]
+        a_ref = np.array([pk[0] for pk in peaks])
+        u = np.log(np.maximum(amp, 1e-300 * a_ref) / a_ref)            # (K, m), <= ~0
+        if u_before is not None and np.max(np.abs(u - u_before)) < AMPLITUDE_TOL:
+            break
+        u_before = u
+        x, dec, chi1 = _fit_pass(lv, u, theta, wt)
+        lines, peak_poles = _line_poles(x, m, lv.sigma0, lv.wd0, u)
+        if not (dec < DECREMENT_TOL and np.isfinite(chi1) and np.all(peak_poles.real < 0)):
+            return (f"the amplitude-dependent refit did not converge (Newton "
+                    f"decrement {dec:.2g} s^2): linear fit kept")
+        if not np.any(theta):
+            if not _significant(_linear_fit(f, Hn, lv.p0, lv.pseudo, wt), chi1, m, lv.dof):
+                return ("the amplitude slopes did not lower the misfit significantly "
+                        f"(F test at {SLOPE_F_LEVEL:g}): linear fit kept")
+        theta, u_fit = x, u
+        allp = lv.with_pseudo(lines)
+        residues, fitted, _ = lsfd(f, Hn, allp, wt)
+        residues, response = residues[:, :m] * scale[:, None], fitted * scale
+        wt = noise_weights(f, Hn, allp)
+    cov = _covariance(lambda t: lv.misfit(t, u_fit, wt), theta, lv.sigma0, lv.n_lin)
+    return _Refit(peak_poles, residues, theta, peaks, cov)
+
+
 def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
     """The modes of one force-controlled level refitted with their amplitude dependence
     (module doc).
@@ -151,72 +282,26 @@ def amplitude_poles(freq_hz, frf, force, quantity, modes, drive, pseudo=()):
     """
     f = np.asarray(freq_hz, float)
     H = to_receptance(f, np.asarray(frf).reshape(f.size, -1), quantity)
-    w = 2 * np.pi * f
-    K, P = H.shape
-    m = len(modes)
-    if m == 0:
+    if len(modes) == 0:
         return modes, None
-    scale = np.sqrt(np.mean(np.abs(H) ** 2, axis=0))
-    Hn = H / scale
-    p0 = np.array([md.pole for md in modes], complex)
-    pseudo = np.asarray(pseudo, complex)
-    n_lin = P * (2 * (m + pseudo.size) + 4)
-    n_theta = 5 * m
-    if 2 * K * P - n_lin - n_theta < 4:
+    lv = _level(f, H, modes, pseudo)
+    if lv.dof < 4:
         return modes, "too few lines for the amplitude-dependent refit: linear fit kept"
-    wt = noise_weights(f, Hn, np.concatenate([p0, pseudo]))
-    res_lin, fit_lin, _ = lsfd(f, Hn, np.concatenate([p0, pseudo]), wt)
-    res_lin = res_lin[:, :m] * scale[:, None]
-    force = np.broadcast_to(np.abs(np.asarray(force, float)), f.shape)
-    force = np.exp(np.polyval(np.polyfit(w - w.mean(), np.log(force), 2), w - w.mean()))
-    sigma0, wd0 = -p0.real, p0.imag
-    theta, response = np.zeros(n_theta), fit_lin * scale
-    u_before = None
-    for _ in range(AMPLITUDE_PASSES):     # the linear fit's amplitudes, then the refit's
-        amp = mode_amplitudes(f, response, force, p0, res_lin, drive)
-        peaks = [_peak(w, amp[:, r]) for r in range(m)]
-        a_ref = np.array([pk[0] for pk in peaks])
-        u = np.log(np.maximum(amp, 1e-300 * a_ref) / a_ref)            # (K, m), <= ~0
-        if u_before is not None and np.max(np.abs(u - u_before)) < AMPLITUDE_TOL:
-            break
-        u_before = u
-
-        def misfit(theta, u=u):
-            lines, _ = _line_poles(theta, m, sigma0, wd0, u)
-            allp = np.concatenate([lines, np.broadcast_to(pseudo, (K, pseudo.size))], axis=1)
-            r = lsfd(f, Hn, allp, wt)[2]
-            return np.concatenate([r.real.ravel(), r.imag.ravel()])
-
-        sol = min((least_squares(misfit, t0, method="lm", x_scale="jac",
-                                 max_nfev=200 * (n_theta + 1)) for t0 in _starts(theta, m)),
-                  key=lambda r: r.cost if np.isfinite(r.cost) else np.inf)
-        floor = PRECISION ** 2 * float(np.mean(np.abs(wt * Hn) ** 2)) / 2
-        x, dec, chi1, _ = polish(misfit, sol.x, n_lin, floor)
-        lines, peak_poles = _line_poles(x, m, sigma0, wd0, u)
-        if not (dec < DECREMENT_TOL and np.isfinite(chi1) and np.all(peak_poles.real < 0)):
-            return modes, (f"the amplitude-dependent refit did not converge (Newton "
-                           f"decrement {dec:.2g} s^2): linear fit kept")
-        if not np.any(theta):
-            if not _significant(_linear_fit(f, Hn, p0, pseudo, wt), chi1, m,
-                                2 * K * P - n_lin - n_theta):
-                return modes, ("the amplitude slopes did not lower the misfit significantly "
-                               f"(F test at {SLOPE_F_LEVEL:g}): linear fit kept")
-        theta = x
-        allp = np.concatenate([lines, np.broadcast_to(pseudo, (K, pseudo.size))], axis=1)
-        residues, fitted, _ = lsfd(f, Hn, allp, wt)
-        residues, response = residues[:, :m] * scale[:, None], fitted * scale
-        wt = noise_weights(f, Hn, allp)
-    cov = _covariance(misfit, theta, sigma0, n_lin)
-    s_w2, s_z = modal_std(peak_poles, cov)
+    fit = _refit(lv, force, drive)
+    if isinstance(fit, str):
+        return modes, fit
+    m = lv.m
+    s_w2, s_z = modal_std(fit.poles, fit.cov)
     out = []
     for r, md in enumerate(modes):
-        wn = abs(peak_poles[r])
+        wn = abs(fit.poles[r])
+        a_peak, w_peak = fit.peaks[r]
         out.append(replace(
-            md, pole=complex(peak_poles[r]), frequency_hz=float(wn / (2 * np.pi)),
-            omega2=float(wn**2), zeta=float(-peak_poles[r].real / wn),
-            shape=residues[:, r], omega2_std=float(s_w2[r]), zeta_std=float(s_z[r]),
-            response_at_peak=float(a_ref[r] * peaks[r][1] ** QUANTITY_POWER[quantity]),
-            omega2_slope=float(theta[2 * m + r]), zeta_slope=float(theta[3 * m + r])))
+            md, pole=complex(fit.poles[r]), frequency_hz=float(wn / (2 * np.pi)),
+            omega2=float(wn**2), zeta=float(-fit.poles[r].real / wn),
+            shape=fit.residues[:, r], omega2_std=float(s_w2[r]), zeta_std=float(s_z[r]),
+            response_at_peak=float(a_peak * w_peak ** QUANTITY_POWER[quantity]),
+            omega2_slope=float(fit.theta[2 * m + r]), zeta_slope=float(fit.theta[3 * m + r])))
     return out, None
 
 

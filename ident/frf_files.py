@@ -42,17 +42,16 @@ from __future__ import annotations
 
 import contextlib
 import io
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ident.errors import InputError, text_file
-from ident.frf_header import (CONTROLS, FRF_TESTS, HEADER_KEYS, header_values,
-                              id_line_values, parse_control, parse_excitation,
-                              parse_run_order, parse_test)
+from ident.errors import InputError
+from ident.frf_csv import (force_and_coherence, header_columns, header_keys, numeric_table,
+                           read_text)
+from ident.frf_header import CONTROLS, FRF_TESTS, header_values, id_line_values
 from ident.poles import QUANTITIES
 from ident.uff_sets import read_uff_sets
 
@@ -123,124 +122,23 @@ class FRFSet:
                                      f"frequency ({self.freq_hz.size}) is needed")
 
 
-def _fail(source, line, column, message):
-    raise InputError(f"{source}:{line}:{column}: {message}")
-
-
 # ------------------------------------------------------------------------------- CSV
 
 def read_frf_csv(path) -> FRFSet:
-    """Read an FRF CSV file (format in the module docstring)."""
+    """Read an FRF CSV file (format in the module docstring; steps in :mod:`ident.frf_csv`)."""
     path = Path(path)
     src = str(path)
-    meta: dict[str, tuple[int, str]] = {}
-    header = None
-    rows = []
-    with text_file(path, src) as fh:
-        for lineno, text in enumerate(fh, start=1):
-            s = text.strip()
-            if not s:
-                continue
-            if header is None and s.startswith("#"):
-                if "=" not in s:
-                    _fail(src, lineno, 1, "comment line must read '# key = value'")
-                key, value = (t.strip() for t in s[1:].split("=", 1))
-                if key not in HEADER_KEYS:
-                    _fail(src, lineno, key, "unknown key (known: " + ", ".join(HEADER_KEYS) + ")")
-                meta[key] = (lineno, value)
-                continue
-            fields = [t.strip() for t in s.split(",")]
-            if header is None:
-                header, header_line = fields, lineno
-            else:
-                rows.append((lineno, fields))
-    if header is None:
-        _fail(src, 1, 1, "empty file: expected a header line")
-    if header[0] != "freq_hz":
-        _fail(src, header_line, header[0] or 1, "first column must be 'freq_hz'")
-    points, re_col, im_col, extra_col = [], {}, {}, {}
-    for j, name in enumerate(header[1:], start=1):
-        if name in ("force", "coherence"):
-            if name in extra_col:
-                _fail(src, header_line, name, "duplicate column name")
-            extra_col[name] = j
-            continue
-        part, _, label = name.partition("_")
-        if part not in ("re", "im") or not label:
-            _fail(src, header_line, name,
-                  "unknown column: expected re_<point>, im_<point>, force or coherence")
-        target = re_col if part == "re" else im_col
-        if label in target:
-            _fail(src, header_line, name, "duplicate column name")
-        target[label] = j
-        if part == "re":
-            points.append(label)
-    for label in points:
-        if label not in im_col:
-            _fail(src, header_line, f"re_{label}", f"no matching column im_{label}")
-    for label in im_col:
-        if label not in re_col:
-            _fail(src, header_line, f"im_{label}", f"no matching column re_{label}")
-    if not points:
-        _fail(src, header_line, "freq_hz", "no FRF columns (re_<point>, im_<point>)")
-    if len(rows) < 2:
-        _fail(src, header_line + 1, "freq_hz", "fewer than 2 frequency lines")
-    values = np.empty((len(rows), len(header)))
-    for i, (lineno, fields) in enumerate(rows):
-        if len(fields) != len(header):
-            _fail(src, lineno, min(len(fields), len(header)) + 1,
-                  f"row has {len(fields)} fields, header has {len(header)}")
-        for j, t in enumerate(fields):
-            try:
-                v = float(t)
-            except ValueError:
-                _fail(src, lineno, header[j], f"not a number: {t!r}")
-            if not math.isfinite(v):
-                _fail(src, lineno, header[j], f"not a finite number: {t!r}")
-            values[i, j] = v
+    text = read_text(path, src)
+    cols = header_columns(text)
+    values, lines = numeric_table(text)
     freq = values[:, 0]
-    lines = np.array([ln for ln, _ in rows])
-    bad = np.flatnonzero(freq <= 0)
-    if bad.size:
-        _fail(src, lines[bad[0]], "freq_hz", f"frequency must be > 0 Hz, got {freq[bad[0]]:g}")
-    bad = np.flatnonzero(np.diff(freq) <= 0)
-    if bad.size:
-        _fail(src, lines[bad[0] + 1], "freq_hz", "frequencies must be strictly increasing")
-    frf = values[:, [re_col[p] for p in points]] + 1j * values[:, [im_col[p] for p in points]]
-    force = coherence = None
-    if "coherence" in extra_col:
-        coherence = values[:, extra_col["coherence"]]
-        bad = np.flatnonzero((coherence < 0) | (coherence > 1))
-        if bad.size:
-            _fail(src, lines[bad[0]], "coherence",
-                  f"coherence must be in [0, 1], got {coherence[bad[0]]:g}")
-    if "force" in extra_col:
-        force = values[:, extra_col["force"]]
-        bad = np.flatnonzero(force <= 0)
-        if bad.size:
-            _fail(src, lines[bad[0]], "force", f"force must be > 0 N, got {force[bad[0]]:g}")
-
-    quantity = excitation = reference = None
-    if "quantity" in meta:
-        ln, quantity = meta["quantity"]
-        if quantity not in QUANTITIES:
-            _fail(src, ln, "quantity", f"must be one of {', '.join(QUANTITIES)}, got {quantity!r}")
-    if "excitation" in meta:
-        ln, text = meta["excitation"]
-        excitation = parse_excitation(text, f"{src}:{ln}:excitation")
-    if "reference" in meta:
-        reference = meta["reference"][1]
-    control = run_order = None
-    if "control" in meta:
-        ln, text = meta["control"]
-        control = parse_control(text, f"{src}:{ln}:control")
-    if "run_order" in meta:
-        ln, text = meta["run_order"]
-        run_order = parse_run_order(text, f"{src}:{ln}:run_order")
-    test = parse_test(meta["test"][1], f"{src}:{meta['test'][0]}:test") if "test" in meta else None
-    return FRFSet(freq, frf, points, quantity, excitation, reference, src, control,
-                  run_order, force, test, coherence)
-
+    frf = (values[:, [cols.re_col[p] for p in cols.points]]
+           + 1j * values[:, [cols.im_col[p] for p in cols.points]])
+    force, coherence = force_and_coherence(src, cols, values, lines)
+    keys = header_keys(text)
+    return FRFSet(freq, frf, cols.points, keys["quantity"], keys["excitation"],
+                  keys["reference"], src, keys["control"], keys["run_order"], force,
+                  keys["test"], coherence)
 
 
 def write_frf_csv(path, frfset: FRFSet) -> None:

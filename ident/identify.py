@@ -145,6 +145,39 @@ def _default_max_order(n_lines, n_peaks):
     return int(min(max(24, 4 * n_peaks + 16), 60, max(4, n_lines // 4)))
 
 
+def _check_options(n_modes: int | None, weighting: str) -> None:
+    """Refuse a number of modes below 1 and an unknown weighting."""
+    if n_modes is not None and int(n_modes) < 1:
+        raise ValueError(f"n_modes must be >= 1, got {n_modes}")
+    if weighting not in ("auto", "relative", "uniform"):
+        raise ValueError(f"weighting must be 'auto', 'relative' or 'uniform', "
+                         f"got {weighting!r}")
+
+
+def _resolved_order(max_order: int | None, n_lines: int, n_peaks: int) -> int:
+    """The highest LSCF order: the one given (>= 1) or the default of the lines and peaks."""
+    if max_order is None:
+        max_order = _default_max_order(n_lines, n_peaks)
+    max_order = int(max_order)
+    if max_order < 1:
+        raise ValueError(f"max_order must be >= 1, got {max_order}")
+    return max_order
+
+
+def _stabilization(f: np.ndarray, Hn: np.ndarray, mif: np.ndarray, max_order: int
+                   ) -> tuple[list, StabilizationDiagram]:
+    """LSCF poles of orders 1..max_order on the band, their chains across orders
+    (:func:`ident.lscf.chain_representatives`) and the stabilization diagram."""
+    w = 2 * np.pi * f
+    pole_sets = lscf_poles(f, Hn, max_order)
+    order, lam, status, link, label = stabilization(f, Hn, pole_sets, (w[0], w[-1]))
+    chains = chain_representatives(lam, link, label, order)
+    wn_d, z_d = pole_to_modal(lam)
+    diagram = StabilizationDiagram(order=order, frequency_hz=wn_d / (2 * np.pi), zeta=z_d,
+                                   status=status, indicator_hz=f, indicator=mif)
+    return chains, diagram
+
+
 def _one_blas_thread(func):
     """Run ``func`` with BLAS on one thread. The refinement of a strongly distorted FRF
     (force control deep in macro-slip) has nearly equal optima, and the summation order
@@ -298,27 +331,14 @@ def identify(freq_hz, frf, band=None, n_modes=None, quantity="receptance",
     Identification (modes sorted by frequency, stabilization diagram, fit error).
     """
     f, H, (lo, hi) = _prepare(freq_hz, frf, band)
-    if n_modes is not None and int(n_modes) < 1:
-        raise ValueError(f"n_modes must be >= 1, got {n_modes}")
-    if weighting not in ("auto", "relative", "uniform"):
-        raise ValueError(f"weighting must be 'auto', 'relative' or 'uniform', "
-                         f"got {weighting!r}")
+    _check_options(n_modes, weighting)
     H = to_receptance(f, H, quantity)
     w = 2 * np.pi * f
     Hn = H / np.sqrt(np.mean(np.abs(H) ** 2, axis=0))
     mif = np.sum(np.abs(Hn) ** 2, axis=1)
     peaks, _ = find_peaks(np.log(mif), prominence=0.1)
-    if max_order is None:
-        max_order = _default_max_order(f.size, peaks.size)
-    max_order = int(max_order)
-    if max_order < 1:
-        raise ValueError(f"max_order must be >= 1, got {max_order}")
-    pole_sets = lscf_poles(f, Hn, max_order)
-    order, lam, status, link, label = stabilization(f, Hn, pole_sets, (w[0], w[-1]))
-    chains = chain_representatives(lam, link, label, order)
-    wn_d, z_d = pole_to_modal(lam)
-    diagram = StabilizationDiagram(order=order, frequency_hz=wn_d / (2 * np.pi), zeta=z_d,
-                                   status=status, indicator_hz=f, indicator=mif)
+    max_order = _resolved_order(max_order, f.size, peaks.size)
+    chains, diagram = _stabilization(f, Hn, mif, max_order)
     if not chains:
         if n_modes is None and peaks.size == 0:
             return Identification([], diagram, float("nan"))

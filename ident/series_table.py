@@ -34,6 +34,7 @@ with the tracks found.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -87,10 +88,10 @@ def _amplitudes(f, mode):
     return s.excitation, amp, note
 
 
-def series_table(fits) -> MeasuredData:
-    """The measured-data table of an identified series (module doc).
-
-    ``fits``: the :class:`ident.series.LevelFit` of every level."""
+def _check_series(fits: list) -> tuple[set, list, np.ndarray]:
+    """One test type and one control, every held level known, run orders all or none:
+    the test types (one), the random-looking signature of each stepped-sine level and
+    the run orders."""
     controls = {f.control for f in fits}
     tests = {f.frfset.test or "stepped-sine" for f in fits}
     if len(tests) > 1:
@@ -113,6 +114,24 @@ def series_table(fits) -> MeasuredData:
                          "other files state one; give all or none (--run-order)")
     run_order = (np.array([f.frfset.run_order for f in fits]) if all(given)
                  else np.arange(1, len(fits) + 1))
+    return tests, signature, run_order
+
+
+@dataclass
+class _Tracks:
+    """The tracked rows ``(level index, mode index, label, MAC)``
+    (:func:`ident.tracking.track_modes`), the level number of each file (repeats of one
+    held level share it), which rows are kept, and those left out with their track's
+    level count."""
+
+    rows: list
+    level_of: dict[int, int]
+    keep: np.ndarray
+    dropped: list
+
+
+def _tracks(fits: list) -> _Tracks:
+    """The modes of the levels followed across levels (:class:`_Tracks`)."""
     try:
         order, rows = track_modes([f.held for f in fits], [f.result.modes for f in fits])
     except ValueError as exc:
@@ -122,6 +141,13 @@ def series_table(fits) -> MeasuredData:
     held = np.array([fits[int(k)].held for k in order], float)
     same = np.r_[False, np.abs(np.diff(held)) <= 1e-9 * np.abs(held[1:])]
     level_of = {int(k): int(v) for k, v in zip(order, np.cumsum(~same))}   # repeats share
+    return _Tracks(rows, level_of, *_kept(fits, rows, level_of))
+
+
+def _kept(fits: list, rows: list, level_of: dict[int, int]) -> tuple[np.ndarray, list]:
+    """Which rows belong to a track of :data:`MIN_LEVELS` levels or more (all when none
+    does and the series is too short to ask it), and the rows left out with their
+    track's level count; refused when no track is long enough in a long series."""
     labels = np.array([r[2] for r in rows])
     n_levels = {lab: int(np.sum(labels == lab)) for lab in set(labels.tolist())}
     if len(fits) >= MIN_LEVELS and max(n_levels.values()) < MIN_LEVELS:
@@ -136,11 +162,22 @@ def series_table(fits) -> MeasuredData:
                          "--band around it and --modes 1")
     keep = np.array([n_levels[lab] >= MIN_LEVELS or max(n_levels.values()) < MIN_LEVELS
                      for lab in labels])
-    out = {k: [] for k in ("level", "excitation", "omega2", "zeta", "mode", "response",
-                           "run", "w_std", "z_std", "f", "stab", "mac", "err", "src", "warn",
-                           "w_slope", "z_slope")}
     dropped = [(r, n_levels[r[2]]) for r, ok in zip(rows, keep) if not ok]
-    for (k, i, lab, m), ok in zip(rows, keep):
+    return keep, dropped
+
+
+#: Keys of the columns :func:`_columns` collects, in the order of its values.
+_COLUMNS = ("level", "excitation", "omega2", "zeta", "mode", "response", "run", "w_std",
+            "z_std", "f", "stab", "mac", "err", "src", "warn", "w_slope", "z_slope")
+
+
+def _columns(fits: list, tracks: _Tracks, run_order: np.ndarray, signature: list
+             ) -> dict[str, list]:
+    """The table's values of the kept rows, column by column (:data:`_COLUMNS`), the
+    warnings of each row joined by `` | ``."""
+    level_of, dropped = tracks.level_of, tracks.dropped
+    out = {k: [] for k in _COLUMNS}
+    for (k, i, lab, m), ok in zip(tracks.rows, tracks.keep):
         if not ok:
             continue
         f = fits[k]
@@ -157,15 +194,20 @@ def series_table(fits) -> MeasuredData:
                                 Path(f.frfset.source).name, " | ".join(warn),
                                 mode.omega2_slope, mode.zeta_slope)):
             out[key].append(v)
+    return out
+
+
+def _table(out: dict[str, list], control: str, test: str) -> MeasuredData:
+    """The measured-data table of the collected columns, with its warnings (the
+    uncertainties left out unless every row has them)."""
     stds = np.array([out["w_std"], out["z_std"]], float)
     has_std = bool(np.all(np.isfinite(stds) & (stds > 0)))
-    control = fits[0].control
     data = MeasuredData(
         level=out["level"], excitation=out["excitation"], omega2=out["omega2"],
         zeta=out["zeta"], mode=out["mode"], run_order=out["run"],
         response_amplitude=out["response"], omega2_std=stds[0] if has_std else None,
         zeta_std=stds[1] if has_std else None, control=[control] * len(out["level"]),
-        test=[tests.pop()] * len(out["level"]),
+        test=[test] * len(out["level"]),
         extra={"x_frequency_hz": np.array(out["f"]), "x_stability": np.array(out["stab"]),
                "x_mac": np.array(out["mac"], float), "x_fit_error": np.array(out["err"]),
                "x_source": np.array(out["src"], dtype=str),
@@ -178,3 +220,12 @@ def series_table(fits) -> MeasuredData:
         data.warnings.append("FRF series: no identification uncertainty at some level: "
                              "omega2_std and zeta_std left out")
     return data
+
+
+def series_table(fits) -> MeasuredData:
+    """The measured-data table of an identified series (module doc).
+
+    ``fits``: the :class:`ident.series.LevelFit` of every level."""
+    tests, signature, run_order = _check_series(fits)
+    out = _columns(fits, _tracks(fits), run_order, signature)
+    return _table(out, fits[0].control, tests.pop())
