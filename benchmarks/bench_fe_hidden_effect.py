@@ -12,7 +12,10 @@ draws. The generator imports nothing from ``inverse/``. The diagnosis
 gain leave-one-level-out) sees only the measured-data table.
 
 Scored per family: the answer (``none``, the cause, or ``unexplained`` for
-out-of-catalogue). Checks printed: no false alarm on ``none`` draws; a cause is named
+out-of-catalogue). A draw whose hidden mechanism the base model refits within the noise
+(its fit test passes) is counted apart: no test of the table can tell it from ``none``;
+the score of the others is the visible mechanisms named right. Checks printed: no false
+alarm on ``none`` draws; a cause is named
 only with a held-out gain > 1; no internal failure would leave as exit 2 (a plain
 ``ValueError`` escaping the FE level); failures (simulations, folds, fits) and the
 levels reached by a fallback counted.
@@ -49,14 +52,21 @@ def run_draw(task) -> dict:
     seed, family = task
     t0 = time.perf_counter()
     case = draw_case(seed, family)
+    from inverse.judge.selection import P_UNEXPLAINED
+
     row = {"seed": seed, "family": family, "answer": case.answer, "named": None, "also": [],
+           "base_p": None, "refittable": False,
            "gain": None, "p": None, "exit": 0, "failures": {}, "error": "",
            "std_columns": case.truth["std_columns"]}
     try:
         r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
                          levels=DoubleBeamLevels.from_data)["fe"]
+        base_p = r["evidence"]["none"]["fit_test"]["p_value"]
         row.update(named=r["cause"], also=r["also"], gain=r["gain"],
-                   p=r["fit_test"]["p_value"], failures=r["failures"])
+                   p=r["fit_test"]["p_value"], failures=r["failures"], base_p=base_p,
+                   # the base model family refits it within the noise: no test of the
+                   # table can tell it from none (scored apart)
+                   refittable=base_p is not None and base_p >= P_UNEXPLAINED)
     except InputError as exc:
         row.update(exit=2, error=f"input: {exc}")
     except InternalError as exc:
@@ -64,6 +74,8 @@ def run_draw(task) -> dict:
     except ValueError as exc:             # would leave the CLI as exit 2: a defect
         row.update(exit=2, error=f"leak: {exc}")
     row["passed"] = row["named"] == case.answer and not row["also"]
+    # a hidden mechanism the base model refits within the noise: only none is right
+    row["detectable"] = case.answer == "none" or not row["refittable"]
     row["seconds"] = time.perf_counter() - t0
     return row
 
@@ -106,6 +118,15 @@ def main() -> None:
              for k in ("simulations", "folds", "fits", "profile_points")}
     print(f"false alarms on none: {len(false_alarms)} of {len(none)} "
           f"({'met' if not false_alarms else 'NOT met'})")
+    hidden = [r for r in rows if r["answer"] != "none"]
+    apart = [r for r in hidden if not r["detectable"]]
+    seen = [r for r in hidden if r["detectable"]]
+    print(f"hidden mechanisms the base model refits within the noise (base fit test p >= "
+          f"the judge's threshold; no test can tell them from none, counted apart): "
+          f"{len(apart)} of {len(hidden)}, of them named none {sum(r['named'] == 'none' for r in apart)}, "
+          f"a cause {sum(r['named'] not in ('none', 'unexplained', None) for r in apart)}")
+    print(f"visible hidden mechanisms named right: {sum(r['passed'] for r in seen)} of "
+          f"{len(seen)}")
     print(f"causes named with held-out gain <= 1 or n/a: {len(bad_gain)} of {len(named)} "
           f"({'met' if not bad_gain else 'NOT met'})")
     print(f"exit 2 from an internal failure: {len(leaks)} ({'met' if not leaks else 'NOT met'}); "

@@ -67,6 +67,8 @@ def run_loop(case, out, executor="serial", progress: bool = True) -> dict:
                                 if n in r["base_fit"].values}},
         "tie": s["tie"], "cause": s["cause"], "also": s["also"],
         "unexplained": s["unexplained"], "untested": s["untested"],
+        "judged_on": s["verdict"]["judged_on"], "misses": s["verdict"]["misses_text"],
+        "agreement": s["verdict"]["agreement"], "verdict": s["verdict"]["lines"],
         "extended": {"model": s["model"], "fit_test": s["fit_test"], "held_out": extended,
                      "parameters": s["parameters"]},
         "gain_held_out": gain,
@@ -106,10 +108,15 @@ def format_summary(s: dict) -> str:
              f"{b['fit_test']['p_value']:.2g}; at the held-out levels "
              f"{_errors(b['held_out']['levels'])}",
              f"2. what it gets wrong: {s['tie']['text']}",
-             f"3. cause: {s['cause']}" + (f" + {', '.join(s['also'])}" if s["also"] else "")
-             + (" (no candidate brings the data within their noise)" if s["unexplained"] else ""),
-             f"4. extended model ({e['model']}): fit test p = {e['fit_test']['p_value']:.2g}; "
+             f"3. cause ({s['judged_on']} fitted): {s['cause']}"
+             + (f" + {', '.join(s['also'])}" if s["also"] else "")
+             + (" (no candidate brings the data within their noise)" if s["unexplained"] else "")
+             + (f"; {s['agreement']}" if s["agreement"] else ""),
+             f"4. extended model ({e['model']} fitted to levels {s['fit_levels'][0]}-"
+             f"{s['fit_levels'][-1]}): fit test p = {e['fit_test']['p_value']:.2g}; "
              f"held out {_errors(e['held_out']['levels'])}"]
+    if s["misses"]:                     # what the held-out levels show comes first
+        lines.insert(1, s["misses"])
     gain = s["gain_held_out"]
     lines.append(f"5. gain at the held-out levels: {gain:.2f} (rms error "
                  f"{b['held_out']['rms_noise_units']:.1f} -> "
@@ -134,17 +141,22 @@ def markdown(s: dict) -> str:
                  else "n/a (no cause named)")
     still = "\n".join(f"   - {m}" for m in s["still_wrong"]) or "   - nothing beyond the noise"
     untested = "; ".join(f"{c}: {why}" for c, why in s["untested"].items()) or "none"
+    misses = f"\n**{s['misses']}.**\n" if s["misses"] else ""
+    agree = f"; {s['agreement']}" if s["agreement"] else ""
     return f"""# The loop on case `{s['case']}`
 
 Measured data `{s['data']}` (mode {s['mode']}): levels {s['fit_levels']} fitted, levels
-{s['held_out_levels']} held out (never seen by any fit). Noise: {s['noise']}.
+{s['held_out_levels']} held out (never seen by the fit of the extended model). Noise:
+{s['noise']}.
+{misses}
 
 1. **Updated FE model (no cause)**: chi2 = {b['chi2']:.1f}, fit test p =
    {b['fit_test']['p_value']:.2g} ({b['fit_test']['test']}).
 2. **What it gets wrong**: {s['tie']['text']}.
-3. **Cause named**: `{s['cause']}`{' + ' + ', '.join(s['also']) if s['also'] else ''}
-   (one judge: fit test, complexity cost, held-out gain > 1; not tested: {untested}).
-4. **Extended model** `{e['model']}`: fit test p = {e['fit_test']['p_value']:.2g}.
+3. **Cause named** ({s['judged_on']} fitted): `{s['cause']}`{' + ' + ', '.join(s['also']) if s['also'] else ''}
+   (one judge: fit test, complexity cost, held-out gain > 1; not tested: {untested}){agree}.
+4. **Extended model** `{e['model']}` fitted to levels {s['fit_levels']}: fit test p =
+   {e['fit_test']['p_value']:.2g}.
 5. **Gain at the held-out levels**: {gain_text}.
 6. **What the extended model still gets wrong** (sigma: the judge's noise):
 {still}

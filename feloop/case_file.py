@@ -145,7 +145,7 @@ def update_builder(cf):
         r = run_update(UpdateSettings(**settings), levels_builder(cf), executor=executor,
                        progress=progress, store=store, case_name=cf.name,
                        model_key=cf.path.read_text(), assumptions=variants)
-        r["notes"] = [_nominal_joint_note(cf)]
+        r["notes"] = [_nominal_joint_note(cf), *r.get("notes", [])]
         r["plausibility"] = joint_plausibility(cf, r["prediction"].joint)
         return r
     return update

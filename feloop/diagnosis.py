@@ -34,6 +34,7 @@ import numpy as np
 from feloop.causes import force_scale_power
 from feloop.levels import level_entries
 from feloop.select import chosen_model, fe_select
+from feloop.verdict import judged_model, one_verdict, verdict_of
 from inverse.fe_selection import held_out_errors, prediction_sd
 from inverse.profile import bounded_interval, linear_grid, run_profiles
 
@@ -113,11 +114,14 @@ def held_out_table(data, mask, pred, problem, f, fit_ok: bool) -> tuple:
     noise = problem.noise
     bound = [n for n in f.free if f.at_bound.get(n)]
     rows, misses = [], []
+    # a singular covariance gives no parameter sd: the noise alone, and the row says so
+    known = all(math.isfinite(v) for v in (*sd["frequency_hz"], *sd["zeta"]))
     for j, i in enumerate(np.flatnonzero(held)):
         s_nf = float(noise.sigma_omega2[i]) / (8 * math.pi ** 2 * f_meas[i])
         s_nz = float(noise.sigma_zeta[i])
-        tot_f = math.hypot(sd["frequency_hz"][j], s_nf)
-        tot_z = math.hypot(sd["zeta"][j], s_nz)
+        m_f, m_z = (sd["frequency_hz"][j], sd["zeta"][j]) if known else (0.0, 0.0)
+        tot_f = math.hypot(m_f, s_nf)
+        tot_z = math.hypot(m_z, s_nz)
         e_f = float(pred.frequency_hz[i] - f_meas[i])
         e_z = float(pred.zeta[i] - data.zeta[i])
         row = {"level": int(data.level[i]), "error_hz": e_f,
@@ -126,7 +130,9 @@ def held_out_table(data, mask, pred, problem, f, fit_ok: bool) -> tuple:
                "pi95_half_width_hz": Z95 * tot_f,
                "model_sd_zeta_rel": sd["zeta"][j] / float(data.zeta[i]),
                "pi95_half_width_zeta_rel": Z95 * tot_z / float(data.zeta[i]),
-               "z_frequency": e_f / tot_f, "z_zeta": e_z / tot_z}
+               "z_frequency": e_f / tot_f, "z_zeta": e_z / tot_z,
+               "sd_kind": ("parameters (delta method) and noise" if known else
+                           "noise alone: the fit's covariance is singular")}
         row["inside_pi95"] = bool(abs(row["z_frequency"]) <= Z95 and abs(row["z_zeta"]) <= Z95)
         rows.append(row)
         if not row["inside_pi95"]:
@@ -163,12 +169,13 @@ def fe_diagnosis(data, mask=None, force_scale: float = 1.0, causes=None,
         raise ValueError(f"the FE diagnosis needs at least 5 fit levels, got {int(mask.sum())}")
     fe = levels(data, force_scale=force_scale)
     s = fe_select(data, mask, fe, causes, progress)
+    every = judged_model(data, mask, fe, s, causes, progress)   # the top judged too
     own = None
     if s["judge_noise"].capped():
         say = progress or (lambda m: None)
         own = own_scatter_verdict(fe_select(data, mask, fe, causes,
                                             lambda m: say(f"own scatter: {m}"), cap=False))
-    return report(data, mask, s, own)
+    return report(data, mask, s, own, every)
 
 
 def own_scatter_verdict(s: dict) -> dict:
@@ -187,12 +194,15 @@ def unconverged_fits(s: dict) -> list:
             if c.fit is not None and not c.fit.converged]
 
 
-def report(data, mask, s: dict, own: dict | None = None) -> dict:
+def report(data, mask, s: dict, own: dict | None = None, every: tuple | None = None) -> dict:
     """``fe_levels`` and ``fe`` of a :func:`fe_select` result (module docstring);
-    ``own``: :func:`own_scatter_verdict` of the uncapped selection, or None."""
+    ``own``: :func:`own_scatter_verdict` of the uncapped selection, or None; ``every``:
+    :func:`feloop.verdict.judged_model` (the choice with all levels fitted names the FE
+    cause; the model is that cause fitted to the fit levels), or None."""
     fe, base = s["fe"], s["base"]
     sel, judged = s["judged"]["selection"], s["judged"]
-    ext, chosen = chosen_model(s)
+    every, name, note = every or (None, s["chosen"], None)
+    ext, chosen = chosen_model(s, name)
     f, prob = chosen.fit, chosen.problem
     base_pred = fe.predict(base.fit.values)
     ext_pred = fe.predict(f.values, ext)
@@ -232,14 +242,22 @@ def report(data, mask, s: dict, own: dict | None = None) -> dict:
                                "(inverse.decrement)",
                 "fallbacks": {n: p.fallback_lines(data.level) for n, p in
                               (("base", base_pred), ("extended", ext_pred))}}
+    verdict = one_verdict(verdict_of(s), every, misses, name,
+                          [int(v) for v in data.level[mask]])
+    judged_on = every or verdict_of(s)
     summary = {
-        "model": fe.label, "cause": sel.cause, "also": sel.also, "candidate": chosen.name,
+        "model": fe.label, "cause": verdict["cause"], "also": verdict["also"],
+        "candidate": chosen.name, "verdict": verdict, "notes": [note] if note else [],
+        "fit_levels_verdict": sel.verdict_json(),
+        "all_levels": None if every is None else {k: v for k, v in every.items()
+                                                  if k != "choice"},
         "fit_levels": [int(v) for v in data.level[mask]],
         "held_out_levels": [int(v) for v in data.level[~mask]],
         "noise": s["judge_noise"].to_json({"omega2": data.omega2, "zeta": data.zeta}),
         "noise_sigma": s["noise"].to_dict(), "fit_test": test.to_json(),
-        "unexplained": sel.unexplained, "closest_miss": sel.closest_miss,
-        "ambiguous": sel.ambiguous, "rivals": sel.rivals,
+        "unexplained": verdict["unexplained"],
+        "closest_miss": judged_on["closest_miss"], "ambiguous": bool(judged_on["rivals"]),
+        "rivals": judged_on["rivals"],
         "untested": s["untested"], "estimator_start": s["estimator_start"],
         "engagement": s["engagement"].to_json(), "engagement_text": s["engagement"].line(),
         "base_fit": base.fit.to_dict(), "extended_fit": f.to_dict(),

@@ -43,6 +43,10 @@ def add_fe_diagnosis(result: dict, data, out=None, levels=None, model_key: str =
     if key not in _DONE:                     # the same data diagnosed again: reuse
         _DONE[key] = fe_diagnosis(d, levels=levels)
     result.update(copy.deepcopy(_DONE[key]))
+    if "cause" in result:                   # one report: both verdicts, reconciled
+        from feloop.verdict import one_mode_agreement
+
+        result["fe"]["one_mode_agreement"] = one_mode_agreement(result, result["fe"])
     if out is not None:
         write_fe_files(result, Path(out))
     return result
@@ -57,9 +61,9 @@ def format_fe(fe: dict) -> list:
     ft = fe["fit_test"]
     lines = [f"FE level ({fe.get('model', 'FE model')} refitted; fit levels "
              f"{fe['fit_levels']}, held out {fe['held_out_levels']}; judged by {fe['rule']}):",
-             f"  FE cause: {fe['cause']}" + (f" + {', '.join(fe['also'])}" if fe["also"] else "")
-             + (f" (closest candidate: {fe['candidate']}, {fe['closest_miss']['why']})"
-                if fe["unexplained"] else ""),
+             *(f"  {t}" for t in fe["verdict"]["lines"]),
+             *([f"  {fe['one_mode_agreement']}"] if "one_mode_agreement" in fe else []),
+             *(f"  note: {t}" for t in fe.get("notes", [])),
              f"  fit of {fe['candidate']}: rms {ft['rms_standardized']:.3g} noise sd, p = "
              f"{_g(ft['p_value'], '.2g')} ({ft['test']})",
              "  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),

@@ -313,9 +313,10 @@ def _select(data, mask, fe, causes, say, noises) -> dict:
             "estimator_start": estimated[1] or "used"}
 
 
-def chosen_model(s: dict):
-    """(extension or None, FitCandidate) of the selected (or closest) candidate."""
-    name = s["chosen"]
+def chosen_model(s: dict, name: str | None = None):
+    """(extension or None, FitCandidate) of candidate ``name`` (default: the selected,
+    or closest, one)."""
+    name = s["chosen"] if name is None else name
     if name == "none":
         return None, s["base"]
     return s["extensions"][name]

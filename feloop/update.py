@@ -42,7 +42,9 @@ import numpy as np
 from feloop.causes import MacroSlip
 from feloop.engagement import KT_GRID
 from feloop.levels import BASE_PARAMETERS, abscissa_of
+from feloop.diagnosis import held_out_table
 from feloop.select import chosen_model, fe_select
+from feloop.verdict import judged_model, one_verdict, verdict_of
 from ident.measured import read_measured
 from inverse.estimate import parse_levels
 from inverse.profile import linear_grid, run_profiles
@@ -158,7 +160,8 @@ def run_update(settings: UpdateSettings, levels, executor="serial", progress: bo
                          "(--assumptions)")
     fe = levels(data, force_scale=settings.force_scale)
     sel = fe_select(data, mask, fe)
-    ext, chosen = chosen_model(sel)
+    every, model_name, note = judged_model(data, mask, fe, sel)   # the top judged too
+    ext, chosen = chosen_model(sel, model_name)
     problem, best, noise = chosen.problem, chosen.fit, sel["noise"]
     P, free = problem.parameters, best.free
     t_sel = time.perf_counter() - t0
@@ -191,12 +194,19 @@ def run_update(settings: UpdateSettings, levels, executor="serial", progress: bo
             sens[name] = _ranges([p.extra for p in inside])
             sens[name]["grid_inside"] = [p.value for p in inside]
     base = sel["base"].fit
+    prediction = fe.predict(best.values, ext)
+    rows, misses = held_out_table(data, mask, prediction, problem, best,
+                                  sel["judged"]["selection"].tests[model_name].passes())
+    verdict = one_verdict(verdict_of(sel), every, misses, model_name,
+                          [int(v) for v in data.level[mask]])
     return {
         "case": case_name, "settings": settings, "data": data, "fit_mask": mask, "noise": noise,
         "selection": sel, "extension": ext, "candidate": chosen.name,
+        "all_levels": every, "verdict": verdict, "held_out": rows, "misses": misses,
+        "notes": [note] if note else [],
         "parameters": P, "fit": best, "base_fit": base, "profiles": profiles,
         "micro_limit": MacroSlip.micro_limit(fe, best.values),
-        "prediction": fe.predict(best.values, ext), "base_prediction": fe.predict(base.values),
+        "prediction": prediction, "base_prediction": fe.predict(base.values),
         "nominal": problem.describe(best.values), "sensitivity": sens,
         "executor": executor if isinstance(executor, str) else executor.describe(),
         "assumptions": assumed,

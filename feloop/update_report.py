@@ -19,6 +19,7 @@ from feloop.causes import force_scale_power
 from feloop.diagnosis import unconverged_fits
 from feloop.digits import fmt, fmt_interval
 from feloop.levels import BASE_PARAMETERS, level_entries
+from feloop.tie import tie_statement
 from inverse.fe_selection import fit_test_of
 from inverse.iwan_modal import kappa_ratio
 from inverse.profile import bounded_interval
@@ -26,8 +27,6 @@ from runs.jsonio import to_jsonable
 
 __all__ = ["summary", "format_text", "markdown", "write_update"]
 
-#: kappa2/|kappa1| of a micro-slip Iwan joint is at least this (its limit as chi -> 0).
-TIE_MINIMUM = 3.0 * math.pi / 4.0
 _LABEL = {"chi": "chi", "ln_dc1": "ln |kappa1|B~ (level 1)", "zeta_v": "zeta_v",
           "f0_hz": "f0 [Hz]", "ln_phimax": "ln(phi_max/a_ref)", "log10_kt": "log10 K_T [N/m]"}
 
@@ -36,25 +35,6 @@ def _fmt(v, digits=6):
     if v is None:
         return "open"
     return f"{v:.{digits}g}"
-
-
-def _tie_statement(data, mask) -> dict:
-    """The Iwan tie against the data over the fit levels (docs/formats/diagnosis.md)."""
-    i = np.flatnonzero(mask)
-    a, b = i[0], i[-1]
-    d_om2 = float(data.omega2[a] - data.omega2[b])
-    d_c = float(2.0 * data.omega2[b] * (data.zeta[b] - data.zeta[a]))
-    ratio = d_om2 / d_c if d_c > 0 else math.nan
-    return {"from_level": int(data.level[a]), "to_level": int(data.level[b]),
-            "loss_omega2": d_om2, "damping_growth_2omega2dzeta": d_c, "ratio": ratio,
-            "iwan_minimum": TIE_MINIMUM,
-            "text": (f"levels {data.level[a]}->{data.level[b]}: the loss of omega^2 "
-                     f"({d_om2:.1f} rad^2/s^2) is {ratio:.2f} times the damping growth "
-                     f"2 omega^2 dzeta ({d_c:.1f} rad^2/s^2); every micro-slip Iwan joint "
-                     f"needs at least kappa2/|kappa1| = 3 pi/4 = {TIE_MINIMUM:.3f} "
-                     + (f"(the measured frequency drops {TIE_MINIMUM / ratio:.1f}x too little)"
-                        if ratio < TIE_MINIMUM else "(the data respect the tie)")
-                     if ratio > 0 else "the measured omega^2 does not fall over the fit levels")}
 
 
 def _levels(data, mask, pred, noise) -> list:
@@ -147,16 +127,16 @@ def summary(r: dict) -> dict:
                   f"{test.p_value:.2g} ({test.test})" if test.p_value is not None else
                   f"chi2 = {best.chi2:.1f} ({test.test})",
                   f"base model (no cause): chi2 = {base.chi2:.1f} on {base.dof} degrees of "
-                  f"freedom", _tie_statement(data, mask)["text"]]
+                  f"freedom", tie_statement(data, mask)["text"]]
     for n in best.free:
         if best.at_bound.get(n):
             statements.append(f"{n} sits on its {best.at_bound[n]} bound "
                               f"({best.values[n]:.4g}); its interval is a profile, and the "
                               f"predictions hold it there")
-    for row in held:
+    for row in r["held_out"]:      # sd: the prediction's (parameters and the judge's noise)
         statements.append(f"level {row['level']} (held out): frequency {row['error_hz']:+.4f} Hz"
                           f", zeta {100 * row['error_zeta_rel']:+.2f} % "
-                          f"({row['error_sigma'][0]:+.0f} / {row['error_sigma'][1]:+.0f} sigma)")
+                          f"({row['z_frequency']:+.1f} / {row['z_zeta']:+.1f} sd)")
     sens = {}
     for name, s in r["sensitivity"].items():
         sens[name] = s
@@ -181,9 +161,12 @@ def summary(r: dict) -> dict:
             "engagement": r["selection"]["engagement"].to_json(),
             "engagement_text": r["selection"]["engagement"].line(),
             "plausibility": r.get("plausibility", []),
-            "tie": _tie_statement(data, mask), "base_chi2": base.chi2,
-            "cause": sel.cause, "also": sel.also, "model": r["candidate"],
-            "unexplained": sel.unexplained, "fit_test": test.to_json(),
+            "tie": tie_statement(data, mask), "base_chi2": base.chi2,
+            "cause": r["verdict"]["cause"], "also": r["verdict"]["also"],
+            "model": r["candidate"], "unexplained": r["verdict"]["unexplained"],
+            "verdict": r["verdict"], "fit_levels_verdict": _verdict_json(sel),
+            "all_levels": _all_levels_json(r["all_levels"]), "held_out": r["held_out"],
+            "misses": r["misses"], "fit_test": test.to_json(),
             "evidence": r["selection"]["judged"]["evidence"],
             "untested": r["selection"]["untested"], "rule": "inverse.judge.select",
             "estimator_start": r["selection"]["estimator_start"],
@@ -194,6 +177,16 @@ def summary(r: dict) -> dict:
             "profiles": {n: p.to_dict() for n, p in r["profiles"].items()},
             "confidence": r["settings"].confidence, "executor": r["executor"],
             "timing_s": r["timing_s"]}
+
+
+def _verdict_json(sel) -> dict:
+    return {"cause": sel.cause, "also": sel.also, "model": sel.best,
+            "unexplained": sel.unexplained}
+
+
+def _all_levels_json(a: dict | None) -> dict | None:
+    """The all-levels choice without its objects (the evidence stays)."""
+    return None if a is None else {k: v for k, v in a.items() if k != "choice"}
 
 
 def _plausibility_lines(checks: list) -> list:
@@ -209,9 +202,9 @@ def format_text(s: dict) -> str:
     ft = s["fit_test"]
     lines = [f"iwanfe update --case {s['case']}  ({s['source']}, mode {s['mode']}, fit levels "
              f"{s['fit_levels'][0]}-{s['fit_levels'][-1]})",
-             f"model: {s['model']} (cause {s['cause']}"
-             + (f" + {', '.join(s['also'])}" if s["also"] else "") + "; chosen by the one "
-             f"judge, as diagnose --case; fit test p = {_fmt(ft['p_value'], 2)}, {ft['test']})",
+             *s["verdict"]["lines"],
+             f"model: {s['model']} fitted to the fit levels (the one judge, as diagnose "
+             f"--case; fit test p = {_fmt(ft['p_value'], 2)}, {ft['test']})",
              f"noise: sigma_omega2 = {n['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = "
              f"{n['sigma_zeta'][0]:.3g} ({n['source']})",
              f"check: {s['engagement_text']}",
