@@ -194,6 +194,23 @@ def unconverged_fits(s: dict) -> list:
             if c.fit is not None and not c.fit.converged]
 
 
+def _failures(s: dict, profiles: dict, levels, base_pred, ext_pred) -> dict:
+    """Failed simulations, folds, fits and profile points of a :func:`fe_select` result,
+    what did not converge, and the levels reached by a fallback (module docstring)."""
+    cands = s["judged"]["candidates"].values()
+    return {"simulations": sum(c.fit.failed_simulations for c in cands if c.fit is not None),
+            "folds": sum(c.cv_failed for c in cands),
+            "fits": sum(c.fit is None for c in cands),
+            "profile_points": sum(p.failed_points for p in profiles.values()),
+            "unconverged_fits": len(unconverged_fits(s)),
+            "unconverged_fit_names": unconverged_fits(s),
+            "unconverged_folds": sum(c.cv_unconverged for c in cands),
+            "unconverged_profile_points": sum(p.unconverged_points for p in profiles.values()),
+            "convergence": "Gauss-Newton decrement below 1e-4 chi2 units (inverse.decrement)",
+            "fallbacks": {n: p.fallback_lines(levels) for n, p in
+                          (("base", base_pred), ("extended", ext_pred))}}
+
+
 def report(data, mask, s: dict, own: dict | None = None, every: tuple | None = None) -> dict:
     """``fe_levels`` and ``fe`` of a :func:`fe_select` result (module docstring);
     ``own``: :func:`own_scatter_verdict` of the uncapped selection, or None; ``every``:
@@ -227,21 +244,7 @@ def report(data, mask, s: dict, own: dict | None = None, every: tuple | None = N
                              abs(r["error_zeta_rel"]) <= TOLERANCE_ZETA_REL for r in rows)
     reading = ext.reading(f.values, fe, fe.linear(10 ** f.values["log10_kt"]), ext_pred) \
         if ext is not None else {}
-    failures = {"simulations": sum(c.fit.failed_simulations for c in
-                                   judged["candidates"].values() if c.fit is not None),
-                "folds": sum(c.cv_failed for c in judged["candidates"].values()),
-                "fits": sum(c.fit is None for c in judged["candidates"].values()),
-                "profile_points": sum(p.failed_points for p in profiles.values()),
-                "unconverged_fits": len(unconverged_fits(s)),
-                "unconverged_fit_names": unconverged_fits(s),
-                "unconverged_folds": sum(c.cv_unconverged
-                                         for c in judged["candidates"].values()),
-                "unconverged_profile_points": sum(p.unconverged_points
-                                                  for p in profiles.values()),
-                "convergence": "Gauss-Newton decrement below 1e-4 chi2 units "
-                               "(inverse.decrement)",
-                "fallbacks": {n: p.fallback_lines(data.level) for n, p in
-                              (("base", base_pred), ("extended", ext_pred))}}
+    failures = _failures(s, profiles, data.level, base_pred, ext_pred)
     verdict = one_verdict(verdict_of(s), every, misses, name,
                           [int(v) for v in data.level[mask]])
     judged_on = every or verdict_of(s)
