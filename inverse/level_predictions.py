@@ -9,6 +9,7 @@ the fit's delta-method t-intervals (:class:`inverse.power_law.PowerLawFit`).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,78 +47,99 @@ def predict_levels(fitres: PowerLawFit, d, in_fit, r, method: str, c_modal: floa
         One record per level (see :class:`inverse.estimate_result.Estimate`) and the
         linear anchors.
     """
-    levels, omega2, zeta = d.level, d.omega2, d.zeta
+    omega2, zeta = d.omega2, d.zeta
     fi = np.flatnonzero(in_fit)
     kap = "paper" if method == "paper" else "exact"
-
-    def q_of(p):
-        return kappa_ratio(p - 1.0, kap)
-
-    def loss(p, lk, rr):  # Delta omega^2(r) = q K r^p
-        return q_of(p) * math.exp(lk) / p * np.asarray(rr) ** p
-
-    omega2_lin = float(np.mean(omega2[fi] + loss(fitres.p, fitres.ln_kt, r[fi])))
+    omega2_lin = float(np.mean(omega2[fi] + _loss(fitres.p, fitres.ln_kt, r[fi], kap)))
     zeta_lin = float(np.mean(zeta[fi] - fitres.delta_c(r[fi]) / (eq45_factor * omega2[fi])))
+    law = _Law(method, kap, r, c_modal, eq45_factor, omega2_lin, zeta_lin)
+    bands = _bands(fitres, law, confidence)
+    predictions = [_record(d, i, bool(not in_fit[i]), bands) for i in range(d.level.size)]
+    return predictions, omega2_lin, zeta_lin
 
-    def absolute(p, lk):
-        om2 = omega2_lin - loss(p, lk, r)
-        dc = math.exp(lk) / p * r ** p
-        if method == "paper":
-            ze = zeta_lin + dc / (eq45_factor * om2)
+
+def _loss(p, lk, rr, kap: str):
+    """The loss of omega^2 at ``rr``: ``Delta omega^2(r) = q K r^p``."""
+    return kappa_ratio(p - 1.0, kap) * math.exp(lk) / p * np.asarray(rr) ** p
+
+
+@dataclass(frozen=True)
+class _Law:
+    """Omega^2 and zeta of the fitted law at the levels' amplitudes ``r``, as functions of
+    the fit's ``(p, ln Kt)``, from the linear anchors."""
+
+    method: str
+    kap: str
+    r: np.ndarray
+    c_modal: float
+    eq45_factor: float
+    omega2_lin: float
+    zeta_lin: float
+
+    def absolute(self, p, lk) -> tuple[np.ndarray, np.ndarray]:
+        """(omega^2, zeta) at every level."""
+        om2 = self.omega2_lin - _loss(p, lk, self.r, self.kap)
+        dc = math.exp(lk) / p * self.r ** p
+        if self.method == "paper":
+            ze = self.zeta_lin + dc / (self.eq45_factor * om2)
         else:
             with np.errstate(invalid="ignore"):   # omega^2 <= 0: nan, named by unphysical
-                ze = zeta_with_joint(dc, om2, c_modal, eq45_factor)
+                ze = zeta_with_joint(dc, om2, self.c_modal, self.eq45_factor)
         return om2, ze
 
-    om2_p, ze_p = absolute(fitres.p, fitres.ln_kt)
-    lo_om2, hi_om2 = fitres.interval(lambda p, k: absolute(p, k)[0], confidence)
-    lo_ze, hi_ze = fitres.interval(lambda p, k: absolute(p, k)[1], confidence)
-
-    def d_om2(p, k):
-        om2 = absolute(p, k)[0]
+    def d_om2(self, p, k) -> np.ndarray:
+        """The loss of omega^2 from each level to the next."""
+        om2 = self.absolute(p, k)[0]
         return om2[:-1] - om2[1:]
 
-    def d_ze(p, k):
-        ze = absolute(p, k)[1]
+    def d_ze(self, p, k) -> np.ndarray:
+        """The growth of zeta from each level to the next."""
+        ze = self.absolute(p, k)[1]
         return ze[1:] - ze[:-1]
 
-    lo_dom, hi_dom = fitres.interval(d_om2, confidence)
-    lo_dze, hi_dze = fitres.interval(d_ze, confidence)
-    dom_p, dze_p = d_om2(fitres.p, fitres.ln_kt), d_ze(fitres.p, fitres.ln_kt)
 
-    def err(pred, meas):
-        return 100.0 * (pred - meas) / meas if meas != 0 else None
+def _bands(fitres: PowerLawFit, law: _Law, confidence: float) -> dict:
+    """``{name: (prediction, lower, upper)}`` for omega2, zeta and their changes."""
+    om2_p, ze_p = law.absolute(fitres.p, fitres.ln_kt)
+    lo_om2, hi_om2 = fitres.interval(lambda p, k: law.absolute(p, k)[0], confidence)
+    lo_ze, hi_ze = fitres.interval(lambda p, k: law.absolute(p, k)[1], confidence)
+    lo_dom, hi_dom = fitres.interval(law.d_om2, confidence)
+    lo_dze, hi_dze = fitres.interval(law.d_ze, confidence)
+    dom_p, dze_p = law.d_om2(fitres.p, fitres.ln_kt), law.d_ze(fitres.p, fitres.ln_kt)
+    return {"omega2": (om2_p, lo_om2, hi_om2), "zeta": (ze_p, lo_ze, hi_ze),
+            "delta_omega2": (dom_p, lo_dom, hi_dom), "delta_zeta": (dze_p, lo_dze, hi_dze)}
 
-    predictions = []
-    for i in range(levels.size):
-        rec = {"level": int(levels[i]), "excitation": float(d.excitation[i]),
-               "held_amplitude": float(d.held_amplitude[i]),
-               "held_out": bool(not in_fit[i]),
-               "omega2": float(om2_p[i]), "omega2_interval": [float(lo_om2[i]), float(hi_om2[i])],
-               "measured_omega2": float(omega2[i]),
-               "omega2_error_percent": err(om2_p[i], omega2[i]),
-               "zeta": float(ze_p[i]), "zeta_interval": [float(lo_ze[i]), float(hi_ze[i])],
-               "measured_zeta": float(zeta[i]),
-               "zeta_error_percent": err(ze_p[i], zeta[i])}
-        if i == 0:
-            rec.update(delta_omega2=None, delta_omega2_interval=None, measured_delta_omega2=None,
-                       delta_omega2_error_percent=None, delta_zeta=None,
-                       delta_zeta_interval=None, measured_delta_zeta=None,
-                       delta_zeta_error_percent=None)
-        else:
-            j = i - 1
-            m_dom = float(omega2[i - 1] - omega2[i])
-            m_dze = float(zeta[i] - zeta[i - 1])
-            rec.update(delta_omega2=float(dom_p[j]),
-                       delta_omega2_interval=[float(lo_dom[j]), float(hi_dom[j])],
-                       measured_delta_omega2=m_dom,
-                       delta_omega2_error_percent=err(dom_p[j], m_dom),
-                       delta_zeta=float(dze_p[j]),
-                       delta_zeta_interval=[float(lo_dze[j]), float(hi_dze[j])],
-                       measured_delta_zeta=m_dze,
-                       delta_zeta_error_percent=err(dze_p[j], m_dze))
-        predictions.append(rec)
-    return predictions, omega2_lin, zeta_lin
+
+def _err(pred, meas):
+    """Percent error of ``pred`` against ``meas`` (None for ``meas == 0``)."""
+    return 100.0 * (pred - meas) / meas if meas != 0 else None
+
+
+def _entries(name: str, band: tuple, j: int, measured) -> dict:
+    """``name`` at index ``j`` of its band, its interval, the measured value, the error."""
+    pred, lo, hi = band
+    return {name: float(pred[j]), f"{name}_interval": [float(lo[j]), float(hi[j])],
+            f"measured_{name}": float(measured), f"{name}_error_percent": _err(pred[j], measured)}
+
+
+def _record(d, i: int, held_out: bool, bands: dict) -> dict:
+    """The prediction record of level ``i`` of ``d`` (with the change from level i - 1)."""
+    omega2, zeta = d.omega2, d.zeta
+    rec = {"level": int(d.level[i]), "excitation": float(d.excitation[i]),
+           "held_amplitude": float(d.held_amplitude[i]), "held_out": held_out,
+           **_entries("omega2", bands["omega2"], i, omega2[i]),
+           **_entries("zeta", bands["zeta"], i, zeta[i])}
+    if i == 0:
+        rec.update(delta_omega2=None, delta_omega2_interval=None, measured_delta_omega2=None,
+                   delta_omega2_error_percent=None, delta_zeta=None,
+                   delta_zeta_interval=None, measured_delta_zeta=None,
+                   delta_zeta_error_percent=None)
+    else:
+        m_dom = float(omega2[i - 1] - omega2[i])
+        m_dze = float(zeta[i] - zeta[i - 1])
+        rec.update(_entries("delta_omega2", bands["delta_omega2"], i - 1, m_dom))
+        rec.update(_entries("delta_zeta", bands["delta_zeta"], i - 1, m_dze))
+    return rec
 
 
 def unphysical(predictions) -> str | None:

@@ -136,15 +136,16 @@ def _failures(fits, cv, held, profile_failures, profile_unconverged=0, separabil
                            "(inverse.diagnosis.lm)"}
 
 
-def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
-             unavailable, untestable, contradictions, refuted, separability, warnings,
-             predictions, selection_id_only, why_id_only, profiles,
-             id_only_failures=None,
-             profile_failures, profile_unconverged=0, selection_own_scatter=None,
-             own_scatter_failures=None) -> dict:
-    """The diagnosis as one JSON-ready dict (module doc)."""
-    sel = selection
-    cause, also, best, rivals = sel.cause, sel.also, sel.best, sel.rivals
+#: What the held-out prediction intervals hold (``held_out_predictions.interval``).
+_INTERVAL_NOTE = ("nominal 95 % prediction interval, model-averaged over the eligible "
+                  "candidates: the noise (scaled up where the training fit misses it), the "
+                  "linear parameters' uncertainty, the nonlinear parameters integrated over "
+                  "their bounded grid, the spread of the candidates' predictions; Student t "
+                  "with each channel's dof (docs/coverage.md)")
+
+
+def _alternatives(fits, cv, sel, refuted) -> list:
+    """Every candidate with its weight, gain and fit test, the heaviest first."""
     base_err = cv["none"][0]
     alternatives = []
     for name, f in fits.items():
@@ -157,56 +158,103 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
             "within_noise": sel.tests[name].passes(),
             "refuted": bool(refuted and name == "none")})
     alternatives.sort(key=lambda a: -a["weight"])
-    ext = fits[best]
-    ext_err = cv[best][0]
-    held_base, held_ext = held["none"][0], held[best][0]
-    ambiguity = None
-    if rivals:
-        ambiguity = {"between": [best] + rivals,
-                     "weights": [sel.weights[best]] + [sel.weights[r] for r in rivals],
-                     "measurement": [separating_measurement(ext.model.causes,
-                                                            fits[r].model.causes)
-                                     for r in rivals]}
-    named_gain = _ratio(base_err, ext_err)
+    return alternatives
+
+
+def _ambiguity(sel, fits) -> dict | None:
+    """Who ties with the named model and what measurement separates them, or None."""
+    best, rivals = sel.best, sel.rivals
+    if not rivals:
+        return None
+    return {"between": [best] + rivals,
+            "weights": [sel.weights[best]] + [sel.weights[r] for r in rivals],
+            "measurement": [separating_measurement(fits[best].model.causes,
+                                                   fits[r].model.causes)
+                            for r in rivals]}
+
+
+def _verdict(selection, failures) -> dict | None:
+    """The JSON verdict of another selection (None when it was not made)."""
+    return None if selection is None else selection.verdict_json(failures)
+
+
+def _identification_only(selection, failures, verdict) -> tuple[dict | None, bool | None]:
+    """The verdict with the identification's noise alone and whether it differs from
+    ``verdict`` ((cause, also)); (None, None) when it was not made."""
+    id_only = _verdict(selection, failures)
+    if id_only is None:
+        return None, None
+    id_only["gains"] = "the held-out gains of the folds with the total noise"
+    return id_only, (id_only["cause"], id_only["also"]) != verdict
+
+
+def _fit_notes(ext, best: str, on_bound: list) -> str:
+    """Sentences on the named fit: not converged, parameters on a bound."""
+    text = ""
+    if not ext.converged and not ext.failed:
+        text += (f" The {best} fit did not converge in {ext.iterations} steps (Gauss-"
+                 f"Newton decrement {ext.decrement:.2g}): its numbers may move with "
+                 f"the optimizer.")
+    if on_bound:
+        text += (f" On a bound in the {best} fit: {', '.join(on_bound)} (not treated as "
+                 f"free: the prediction intervals integrate the nonlinear parameters "
+                 f"over their bounded range).")
+    return text
+
+
+def _levels_json(obs, d, raw, fits, cv, best: str) -> dict:
+    """Data, fits and residuals per row, for the plots."""
     bo, bz, br = _predictions(fits["none"], obs)
-    eo, ez, er = _predictions(ext, obs)
+    eo, ez, er = _predictions(fits[best], obs)
     n = obs.n
     ch = len(obs.channels)
 
     def stdres(f):
         return f.residual.reshape(ch, n).T
 
+    return {
+        "level": obs.levels, "abscissa": raw, "s": obs.s, "run_order": d.run_order,
+        "omega2": obs.omega2, "zeta": obs.zeta,
+        "response_amplitude": d.response_amplitude,
+        "base_omega2": bo, "base_zeta": bz, "base_response": br,
+        "extended_omega2": eo, "extended_zeta": ez, "extended_response": er,
+        "base_residual": stdres(fits["none"]), "extended_residual": stdres(fits[best]),
+        "base_cv_residual": cv["none"][1], "extended_cv_residual": cv[best][1],
+        "channels": obs.channels}
+
+
+def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, averaged,
+             unavailable, untestable, contradictions, refuted, separability, warnings,
+             predictions, selection_id_only, why_id_only, profiles,
+             id_only_failures=None,
+             profile_failures, profile_unconverged=0, selection_own_scatter=None,
+             own_scatter_failures=None) -> dict:
+    """The diagnosis as one JSON-ready dict (module doc)."""
+    sel = selection
+    cause, also, best, rivals = sel.cause, sel.also, sel.best, sel.rivals
+    base_err, ext_err = cv["none"][0], cv[best][0]
+    ext = fits[best]
+    held_base, held_ext = held["none"][0], held[best][0]
+    named_gain = _ratio(base_err, ext_err)
     unfit = [k for k, f in fits.items() if f.aic is None]
     bounds = parameter_bounds(ext, obs, profiles)
     on_bound = [k for k, b in bounds.items() if b["at_bound"]]
-    values = {"omega2": obs.omega2, "zeta": obs.zeta, "response": obs.log_r}
-    noise_json = noise.to_json(values)
-    id_only = (None if selection_id_only is None
-               else selection_id_only.verdict_json(id_only_failures))
-    if id_only is not None:
-        id_only["gains"] = "the held-out gains of the folds with the total noise"
-    changes = None if id_only is None else (id_only["cause"], id_only["also"]) != (cause, also)
+    noise_json = noise.to_json({"omega2": obs.omega2, "zeta": obs.zeta, "response": obs.log_r})
+    id_only, changes = _identification_only(selection_id_only, id_only_failures, (cause, also))
     summary = describe(cause, also, params[best], named_gain, sel.tests[best].to_json(),
                        contradictions, best, rivals, np.unique(obs.levels).size,
                        separability["inseparable"], unfit)
     summary += _noise_sentence(noise_json, id_only, changes, why_id_only)
-    own = (None if selection_own_scatter is None
-           else selection_own_scatter.verdict_json(own_scatter_failures))
+    own = _verdict(selection_own_scatter, own_scatter_failures)
     summary += own_scatter_sentence(noise.capped(), own, (cause, also))
     summary += extrapolation_note("+".join([cause] + also), _ratio(held_base, held_ext),
                                   n_top)
-    if not ext.converged and not ext.failed:
-        summary += (f" The {best} fit did not converge in {ext.iterations} steps (Gauss-"
-                    f"Newton decrement {ext.decrement:.2g}): its numbers may move with "
-                    f"the optimizer.")
-    if on_bound:
-        summary += (f" On a bound in the {best} fit: {', '.join(on_bound)} (not treated as "
-                    f"free: the prediction intervals integrate the nonlinear parameters "
-                    f"over their bounded range).")
+    summary += _fit_notes(ext, best, on_bound)
     return {
         "cause": cause, "also": also, "mode": int(d.mode[0]),
         "control": "response" if obs.response_controlled else "force",
-        "alternatives": alternatives, "ambiguous": bool(rivals), "ambiguity": ambiguity,
+        "alternatives": _alternatives(fits, cv, sel, refuted), "ambiguous": bool(rivals),
+        "ambiguity": _ambiguity(sel, fits),
         "unexplained": sel.unexplained, "closest_miss": sel.closest_miss,
         "contradictions": [c.statement for c in contradictions],
         "contradiction_details": [{"kind": c.kind, **c.numbers} for c in contradictions],
@@ -219,16 +267,7 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
         "held_out_errors": {"base": held_base, "extended": held_ext,
                             "note": held["none"][1] or held[best][1]},
         "held_out_predictions": {"model": best, "levels": predictions,
-                                 "averaged_over": averaged,
-                                 "interval": "nominal 95 % prediction interval, model-"
-                                             "averaged over the eligible candidates: "
-                                             "the noise (scaled up where the training "
-                                             "fit misses it), the linear parameters' "
-                                             "uncertainty, the nonlinear parameters "
-                                             "integrated over their bounded grid, the "
-                                             "spread of the candidates' predictions; "
-                                             "Student t with each channel's dof "
-                                             "(docs/coverage.md)"},
+                                 "averaged_over": averaged, "interval": _INTERVAL_NOTE},
         "error_measure": ERROR_MEASURE.format(top=n_top),
         "evidence": _evidence(fits, unavailable, sel),
         "criterion": {"t_cause": T_CAUSE, "w_ambiguous": W_AMBIGUOUS,
@@ -245,15 +284,7 @@ def assemble(*, obs, d, raw, fits, params, selection, cv, held, n_top, noise, av
         "separability": separability,
         "summary": summary,
         "data_warnings": warnings,
-        "levels": {
-            "level": obs.levels, "abscissa": raw, "s": obs.s, "run_order": d.run_order,
-            "omega2": obs.omega2, "zeta": obs.zeta,
-            "response_amplitude": d.response_amplitude,
-            "base_omega2": bo, "base_zeta": bz, "base_response": br,
-            "extended_omega2": eo, "extended_zeta": ez, "extended_response": er,
-            "base_residual": stdres(fits["none"]), "extended_residual": stdres(ext),
-            "base_cv_residual": cv["none"][1], "extended_cv_residual": cv[best][1],
-            "channels": obs.channels},
+        "levels": _levels_json(obs, d, raw, fits, cv, best),
     }
 
 

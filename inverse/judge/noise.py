@@ -252,6 +252,92 @@ def time_separable(level_ids, run_order, amplitude=None) -> bool:
     return not (np.all(dt > 0) or np.all(dt < 0))
 
 
+@dataclass(frozen=True)
+class _Scatter:
+    """One channel's repeatability as judged so far: the relative variance ``s2`` on
+    ``nu`` dof, its ``words`` and ``kind`` (:class:`NoiseModel`)."""
+
+    s2: float
+    nu: float
+    words: str
+    kind: str
+
+
+def _repeatability(x, y, rel: bool, level_ids, t) -> tuple[np.ndarray, _Scatter]:
+    """``y`` (n,) with its run-order term (over the rows ``t``) taken out, and its
+    scatter: the repeats, pooled with the level means' scatter about a smooth curve
+    when they have fewer than :data:`MIN_REPEAT_DOF` dof, or that scatter alone."""
+    labels = np.unique(level_ids)
+    # a step or drift with run order is found on the rows (a repeat run later
+    # differs by it) and taken out of the repeats and of the level means alike
+    y0 = y
+    y, stepped, kt = _without_run_order(x, y, rel, t)
+    s_r, nu_r = pooled_repeats(level_ids, y, relative=rel)
+    # a term that differs between a level's repeats was fitted on them too
+    shift = np.log(y / y0) if rel else y - y0
+    within = kt and any(np.ptp(shift[level_ids == g]) > 1e-12 for g in labels)
+    n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
+    means = np.array([np.mean(y[level_ids == g]) for g in labels])
+    xm = np.array([np.mean(x[level_ids == g]) for g in labels])
+    ym = np.log(means) if rel else means
+    s_s, nu_s = _scatter(xm, ym, reserved=kt)[:2]
+    curve_words = f"scatter about a smooth curve ({nu_s} dof)" + (
+        f" with {stepped} in run order taken out" if stepped else "")
+    if nu_r >= MIN_REPEAT_DOF:
+        nu = nu_r - kt if within else nu_r
+        s2 = s_r**2 * nu_r / nu
+        words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu} dof)" + (
+            f" with {stepped} in run order taken out" if within else ""), "repeats"
+    elif nu_r > 0:
+        nu = nu_r + nu_s
+        s2 = (nu_r * s_r**2 + nu_s * s_s**2) / nu
+        words = (f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof) pooled with the "
+                 f"{curve_words}")
+        kd = "repeats+smooth"
+    else:
+        s2, nu = s_s**2, nu_s
+        words, kd = curve_words, "smooth"
+    return y, _Scatter(s2, nu, words, kd)
+
+
+def _judged(c: str, sc: _Scatter, id_rel2: float, prior: RepeatabilityPrior | None,
+            cap: bool, assumed: dict) -> tuple[float, _Scatter, str]:
+    """The relative repeatability sd of channel ``c`` judged against its identification
+    noise ``id_rel2`` and ``prior`` (setting ``assumed[c]`` where it has one), the
+    scatter as judged, the words of a conflict with the prior."""
+    s2, nu, words, kd = sc.s2, sc.nu, sc.words, sc.kind
+    r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
+    pooled, conflict = False, ""
+    within = bool(nu and id_rel2 > 0 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P)
+    if prior is not None and prior.rel_sd.get(c) and within:
+        assumed[c] = prior.record(c, used=False)        # no repeatability shown
+    elif prior is not None and prior.rel_sd.get(c):
+        rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2,
+                                               may_cap=cap and kd != "repeats")
+        if rep2 is None:
+            conflict = said
+        else:
+            r_rel, pooled = math.sqrt(rep2), True
+            tag = "+capped" if assumed[c]["capped"] else ""
+            kd, words = ((f"{kd}+{prior.kind}{tag}", words + said) if nu
+                         else (prior.kind, said.strip()))
+            nu = nu_post
+    if not pooled and r_rel and within:
+        r_rel = 0.0
+        words += (f" exceeds it by {math.sqrt(s2 / id_rel2):.2f} times, within chance: "
+                  f"p = {chi2_dist.sf(nu * s2 / id_rel2, nu):.2g}")
+    return r_rel, _Scatter(s2, nu, words, kd), conflict
+
+
+def _identification_only(has_id: bool, sc: _Scatter) -> _Scatter:
+    """The judged scatter of a channel left without a repeatability part."""
+    words = (("identification only" if has_id else "floor only")
+             + ((f" (the {sc.words})" if " within chance" in sc.words else
+                 f" (the {sc.words} does not exceed it)") if sc.nu else
+                " (too few levels for a scatter)"))
+    return _Scatter(sc.s2, math.inf, words, "identification")
+
+
 def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
                 floors: dict | None = None, model_error: dict | None = None,
                 prior: RepeatabilityPrior | None = RIG_REPEATABILITY,
@@ -281,7 +367,6 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
     level_ids = np.asarray(level_ids)
     x = np.log(np.asarray(abscissa, float))
     ident, rep, total, source, dof, kind, floor, assumed = {}, {}, {}, {}, {}, {}, {}, {}
-    labels = np.unique(level_ids)
     rows_t = (np.asarray(run_order, float) if run_order is not None
               and time_separable(level_ids, run_order, x) else None)
     for c, y in values.items():
@@ -289,68 +374,16 @@ def noise_model(abscissa, values: dict, stds: dict, level_ids, run_order=None,
         rel = c in _RELATIVE
         scale = np.abs(y) if rel else np.ones_like(y)
         idn = np.zeros_like(y) if stds.get(c) is None else np.asarray(stds[c], float)
-        # a step or drift with run order is found on the rows (a repeat run later
-        # differs by it) and taken out of the repeats and of the level means alike
-        y0 = y
-        y, stepped, kt = _without_run_order(x, y, rel, rows_t)
-        s_r, nu_r = pooled_repeats(level_ids, y, relative=rel)
-        # a term that differs between a level's repeats was fitted on them too
-        shift = np.log(y / y0) if rel else y - y0
-        within = kt and any(np.ptp(shift[level_ids == g]) > 1e-12 for g in labels)
-        n_rep = sum(int(np.sum(level_ids == g) > 1) for g in labels)
-        means = np.array([np.mean(y[level_ids == g]) for g in labels])
-        xm = np.array([np.mean(x[level_ids == g]) for g in labels])
-        ym = np.log(means) if rel else means
-        s_s, nu_s = _scatter(xm, ym, reserved=kt)[:2]
-        curve_words = f"scatter about a smooth curve ({nu_s} dof)" + (
-            f" with {stepped} in run order taken out" if stepped else "")
-        if nu_r >= MIN_REPEAT_DOF:
-            nu = nu_r - kt if within else nu_r
-            s2 = s_r**2 * nu_r / nu
-            words, kd = f"repeats of {_plural(n_rep, 'level')} ({nu} dof)" + (
-                f" with {stepped} in run order taken out" if within else ""), "repeats"
-        elif nu_r > 0:
-            nu = nu_r + nu_s
-            s2 = (nu_r * s_r**2 + nu_s * s_s**2) / nu
-            words = (f"repeats of {_plural(n_rep, 'level')} ({nu_r} dof) pooled with the "
-                     f"{curve_words}")
-            kd = "repeats+smooth"
-        else:
-            s2, nu = s_s**2, nu_s
-            words, kd = curve_words, "smooth"
+        y, sc = _repeatability(x, y, rel, level_ids, rows_t)
         id_rel2 = float(np.mean((idn / scale) ** 2))
-        r_rel = math.sqrt(max(0.0, s2 - id_rel2)) if nu else 0.0
-        pooled, conflict = False, ""
-        within = bool(nu and id_rel2 > 0 and chi2_dist.sf(nu * s2 / id_rel2, nu) > SCATTER_P)
-        if prior is not None and prior.rel_sd.get(c) and within:
-            assumed[c] = prior.record(c, used=False)        # no repeatability shown
-        elif prior is not None and prior.rel_sd.get(c):
-            rep2, nu_post, assumed[c], said = pool(prior, c, s2 if nu else 0.0, nu, id_rel2,
-                                                   may_cap=cap and kd != "repeats")
-            if rep2 is None:
-                conflict = said
-            else:
-                r_rel, pooled = math.sqrt(rep2), True
-                tag = "+capped" if assumed[c]["capped"] else ""
-                kd, words = ((f"{kd}+{prior.kind}{tag}", words + said) if nu
-                             else (prior.kind, said.strip()))
-                nu = nu_post
-        if not pooled and r_rel and within:
-            r_rel = 0.0
-            words += (f" exceeds it by {math.sqrt(s2 / id_rel2):.2f} times, within chance: "
-                      f"p = {chi2_dist.sf(nu * s2 / id_rel2, nu):.2g}")
+        r_rel, sc, conflict = _judged(c, sc, id_rel2, prior, cap, assumed)
         r = r_rel * scale
         if r_rel > 0 and c in model_error:
             r = np.sqrt(r**2 + np.asarray(model_error[c], float) ** 2)
         if r_rel == 0.0:
-            has_id = stds.get(c) is not None
-            words = (("identification only" if has_id else "floor only")
-                     + ((f" (the {words})" if " within chance" in words else
-                         f" (the {words} does not exceed it)") if nu else
-                        " (too few levels for a scatter)"))
-            kd, nu = "identification", math.inf
+            sc = _identification_only(stds.get(c) is not None, sc)
         fl = floors.get(c, _DEFAULT_FLOOR) * (float(np.median(np.abs(y))) if rel else 1.0)
         ident[c], rep[c], floor[c] = idn, r, fl
         total[c] = np.maximum(np.sqrt(idn**2 + r**2), fl)
-        source[c], dof[c], kind[c] = words + conflict, float(nu), kd
+        source[c], dof[c], kind[c] = sc.words + conflict, float(sc.nu), sc.kind
     return NoiseModel(ident, rep, total, source, dof, kind, floor, assumed)
