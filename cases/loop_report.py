@@ -75,8 +75,11 @@ def run_loop(case, out, executor="serial", progress: bool = True) -> dict:
         "error_measure": "rms of (model - measured)/sigma over omega2 and zeta at the "
                          "held-out levels; sigma from the judge's noise model",
         "statements": s["misfit"],
+        "plausibility": s.get("plausibility", []),
         "still_wrong": [m for m in s["misfit"]
-                        if m.startswith("level ") or " sits on its " in m],
+                        if m.startswith("level ") or " sits on its " in m]
+        + [f"{c['parameter']} = {c['value']:.4g} ({c['kind']}) is implausible: {c['source']}"
+           for c in s.get("plausibility", []) if c["verdict"] == "implausible"],
     }
     out.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(out / "update" / "update_levels.png", out / "update_levels.png")

@@ -77,15 +77,14 @@ def _double_beam_update(executor="serial", progress=False, store=None, **setting
     settings = {"data_path": str(DEFAULT_DATA), "mode_label": 2, "fit_levels": "1-7",
                 **{k: v for k, v in settings.items() if v is not None}}
     variants = assumption_variants() if settings.get("assumptions") else None
-    from casefile.plausibility import joint_plausibility
     from casefile.schema import read_case_file
+    from feloop.case_file import fitted_plausibility
 
     r = run_update(UpdateSettings(**settings), DoubleBeamLevels.from_data, executor=executor,
                    progress=progress, store=store, case_name="double-beam",
                    model_key=repr(DoubleBeamConfig()), assumptions=variants)
     # the same glue interface as its case file describes
-    r["plausibility"] = joint_plausibility(read_case_file(CASE_FILES["double-beam"]),
-                                           r["prediction"].joint)
+    r["plausibility"] = fitted_plausibility(read_case_file(CASE_FILES["double-beam"]), r)
     return r
 
 

@@ -28,7 +28,7 @@ from casefile.plausibility import joint_plausibility
 from ident.errors import InputError
 
 __all__ = ["qualifies", "levels_builder", "assumption_variants", "update_builder",
-           "uncertainty_builder"]
+           "fitted_plausibility", "uncertainty_builder"]
 
 
 def qualifies(cf) -> bool:
@@ -146,9 +146,20 @@ def update_builder(cf):
                        progress=progress, store=store, case_name=cf.name,
                        model_key=cf.path.read_text(), assumptions=variants)
         r["notes"] = [_nominal_joint_note(cf), *r.get("notes", [])]
-        r["plausibility"] = joint_plausibility(cf, r["prediction"].joint)
+        r["plausibility"] = fitted_plausibility(cf, r)
         return r
     return update
+
+
+def fitted_plausibility(cf, r: dict) -> list[dict]:
+    """:func:`casefile.plausibility.joint_plausibility` of an update's (or an FE
+    diagnosis's) fitted joint and, when fitted, its air drag coefficient: ``r`` holds
+    ``joint`` (dict) or ``prediction`` and ``fit`` (the update's result)."""
+    if "prediction" in r:
+        joint, values, free = r["prediction"].joint, r["fit"].values, r["fit"].free
+    else:
+        joint, values, free = r["joint"], r["extended_fit"]["values"], r["extended_fit"]["free"]
+    return joint_plausibility(cf, joint, values["drag_cd"] if "drag_cd" in free else None)
 
 
 def uncertainty_builder(cf):

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from feloop.digits import fmt_interval
+from feloop.update_text import plausibility_lines
 from inverse.diagnosis.report import own_scatter_sentence
 
 __all__ = ["add_fe_diagnosis", "format_fe", "write_fe_files"]
@@ -68,6 +69,7 @@ def format_fe(fe: dict) -> list:
              f"{_g(ft['p_value'], '.2g')} ({ft['test']})",
              "  noise: " + "; ".join(f"{c}: {n['source']}" for c, n in fe["noise"].items()),
              *([f"  check: {fe['engagement_text']}"] if "engagement_text" in fe else []),
+             *(f"  {t}" for t in plausibility_lines(fe.get("plausibility", []))),
              *_own_scatter_lines(fe),
              f"  cross-validated: base error {_g(fe['base_error'])}, extended "
              f"{_g(fe['extended_error'])}, gain {_g(fe['gain'])}",

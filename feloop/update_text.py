@@ -9,7 +9,7 @@ import numpy as np
 
 from feloop.digits import fmt, fmt_interval
 
-__all__ = ["LABEL", "format_text", "markdown"]
+__all__ = ["LABEL", "format_text", "markdown", "plausibility_lines"]
 
 #: the parameters' names in the text and the figures
 LABEL = {"chi": "chi", "ln_dc1": "ln |kappa1|B~ (level 1)", "zeta_v": "zeta_v",
@@ -22,7 +22,7 @@ def _fmt(v, digits=6):
     return f"{v:.{digits}g}"
 
 
-def _plausibility_lines(checks: list) -> list:
+def plausibility_lines(checks: list) -> list:
     """A line per check of :func:`casefile.plausibility.joint_plausibility`."""
     return [f"plausibility: {c['parameter']} = {c['value']:.4g} ({c['kind']}): "
             f"{c['verdict']} (range "
@@ -40,7 +40,7 @@ def _head_lines(s: dict) -> list:
             f"noise: sigma_omega2 = {n['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = "
             f"{n['sigma_zeta'][0]:.3g} ({n['source']})",
             f"check: {s['engagement_text']}",
-            *_plausibility_lines(s.get("plausibility", [])),
+            *plausibility_lines(s.get("plausibility", [])),
             *(f"note: {t}" for t in s.get("notes", []))]
 
 

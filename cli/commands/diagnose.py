@@ -260,6 +260,9 @@ def run(args) -> int:
         from feloop.diagnosis_report import add_fe_diagnosis
         add_fe_diagnosis(result, data, out=args.out, levels=case.builders["fe_levels"],
                          model_key=case.source)
+        if case.file is not None:          # the fitted joint against the file's interfaces
+            from feloop.case_file import fitted_plausibility
+            result["fe"]["plausibility"] = fitted_plausibility(case.file, result["fe"])
     if args.backbone:
         result["backbone"] = _backbone_prediction(args, data, result["mode"])
     if args.out:
