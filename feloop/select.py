@@ -146,7 +146,8 @@ def untestable(data, catalogue=None) -> dict:
     every cause of the ``catalogue`` (default: :data:`inverse.diagnosis.causes.CATALOGUE`)
     without an FE realization (:data:`feloop.causes.EXTENSIONS`) is listed as not
     tested at the FE level, never skipped without a word."""
-    out = {c: "no FE realization (feloop/causes.py): not tested at the FE level"
+    out = {c: "no FE realization (FE_REALIZATION = None in its cause file): not tested "
+              "at the FE level"
            for c in (CATALOGUE if catalogue is None else catalogue) if c not in EXTENSIONS}
     out["nonproportional-amplitude"] = ("the FE fit compares omega2 and zeta only; a force "
                                         "shortfall needs a response channel")

@@ -314,7 +314,7 @@ def test_a_cause_whose_fit_cannot_be_set_up_is_counted_not_fatal(monkeypatch):
     from feloop.diagnosis import report
     from feloop.select import fe_select
 
-    monkeypatch.setattr(fe_causes.CubicHardening, "step",
+    monkeypatch.setattr(type(fe_causes.EXTENSIONS["geometric-hardening"]), "step",
                         lambda self, fe, base, noise, top: float("nan"))
     data = _noisy_double_beam_table()
     s = fe_select(data, np.arange(10) < 7, DoubleBeamLevels.from_data(data),

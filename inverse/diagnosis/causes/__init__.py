@@ -21,11 +21,12 @@ catalogue order is each module's ``ORDER``. A cause module defines:
   adds to a base fit (``base``: the base model's physical parameters), for the
   separability analysis;
 * ``testable(obs) -> (bool, reason)``: whether these data can test it at all;
-* ``FE_REALIZATION``: the slot for its FE-level realization (None until the FE level
-  fills it: a callable building the FE physics of the cause, see
-  ``feloop/causes.py``).
+* ``FE_REALIZATION``: its FE-level realization, an
+  :class:`inverse.diagnosis.fe_realization.Extension` (or None: the FE level then lists
+  it as not tested there).
 
-Adding a cause: drop a file here (no other file needs to change; the pair advice of
+Adding a cause: drop a file here, its FE realization in it (no other file needs to
+change; the pair advice of
 :mod:`inverse.diagnosis.separability` falls back to "add levels above the top one"
 unless a line is added there).
 """

@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from fe.hb_resonance import CubicSpring
+from inverse.diagnosis.fe_realization import Extension, mode_row
+
 ID = "geometric-hardening"
 ORDER = 30
 WORDS = ("a hardening stiffness lifts the natural frequency with amplitude against the "
@@ -23,8 +26,6 @@ NONLINEAR = [("nu_hardening", 0.0, 3.0, np.array([0.0, 0.6, 1.4, 2.5])),
 LINEAR = ["h"]
 NONNEG = ("h",)
 EFFECT = "h"
-#: Slot for the FE realization (filled by the FE level).
-FE_REALIZATION = None
 
 
 def hardening_power(nu, s_contact, s_levels):
@@ -68,3 +69,32 @@ def signature(obs, base):
 def testable(obs):
     """Always testable."""
     return True, None
+
+
+# --- the FE realization (feloop/: the FE level fits it to the levels) -------------
+# A stiffness growing with amplitude squared: the cubic term of a large-deflection beam
+# (nonlinear curvature and the axial stretching a glued tip forces on the strips; Crespo
+# da Silva & Glynn, J. Struct. Mech. 6 (1978) 437; Nayfeh & Pai, Linear and Nonlinear
+# Structural Mechanics, 2004), Galerkin-projected on the mode: a modal cubic spring ``k3
+# q^3`` (:class:`fe.hb_resonance.CubicSpring`), ``k3 >= 0``.
+class CubicHardening(Extension):
+    cause, parameter, unit = "geometric-hardening", "k3", "1/(kg s^2 m^2)"
+    fit_order = 30
+    description = "modal cubic stiffness k3 (mass-normalized mode)"
+    stiffens = True
+    force_scale_power = -2        # omega^2 rise ~ k3 x amplitude^2, amplitude ~ s
+
+    def step(self, fe, base, noise, top):
+        a = float(base.modal_amplitude[top])
+        return float(noise.sigma_omega2[top] / (0.75 * a * a))
+
+    def apply(self, p, fe, lin, scale, forces):
+        return scale, forces, (CubicSpring(mode_row(lin), np.array([float(p["k3"])])),)
+
+    def reading(self, p, fe, lin, pred):
+        a = float(pred.modal_amplitude[-1])
+        return {"k3": float(p[self.parameter]),
+                "omega2_rise_top_level": 0.75 * float(p[self.parameter]) * a * a}
+
+
+FE_REALIZATION = CubicHardening()

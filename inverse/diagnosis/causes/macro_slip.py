@@ -7,10 +7,14 @@ term, ``x = x_top s`` (:func:`slip_shapes`; ``U, S >= 0``, ``S`` the Dirac weigh
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import special
 
+from inverse.diagnosis.fe_realization import Extension
 from inverse.iwan_modal import kappa1_per_R, kappa_ratio
+from inverse.update import Parameter
 from joints.describing import slider_in_phase
 
 ID = "macro-slip"
@@ -23,8 +27,6 @@ LINEAR = ["U", "S"]
 NONNEG = ("U", "S")
 EFFECT = None
 REPLACES_JOINT = True
-#: Slot for the FE realization (filled by the FE level).
-FE_REALIZATION = None
 
 
 def slip_shapes(x, chi):
@@ -95,3 +97,47 @@ def signature(obs, base):
 def testable(obs):
     """Always testable."""
     return True, None
+
+
+# --- the FE realization (feloop/: the FE level fits it to the levels) -------------
+# The four-parameter Iwan joint leaves micro-slip at ``phi_max`` (Segalman 2005, J.
+# Appl. Mech. 72, 752: beyond it the joint slides as a whole at ``F_S``). The base model
+# has ``beta = 0``, the largest ``phi_max`` the stuck stiffness allows
+# (:func:`feloop.levels.phi_max_of`, eq. 1); the extension frees ``ln(1+beta)``: a Dirac
+# share of the density that lowers ``phi_max`` and ``F_S`` and brings macro-slip into
+# the tested levels.
+class MacroSlip(Extension):
+    cause, parameter = "macro-slip", "ln_phimax"
+    fit_order = 10
+    description = "ln(phi_max / a_ref): macro-slip onset in units of the level-1 slip"
+    lower, upper = math.log(1e-3), math.inf
+
+    @staticmethod
+    def micro_limit(fe, values) -> float:
+        """``ln(phi_max(beta = 0) / a_ref)`` of a parameter set: the value at and above
+        which the extension is the base model."""
+        j = fe.joint({k: v for k, v in values.items() if k != "ln_phimax"})
+        return math.log(j["phi_max"] / j["linear"].a_ref)
+
+    def step(self, fe, base, noise, top):
+        return 0.35
+
+    def spec(self, fe, base, noise, top):
+        p = super().spec(fe, base, noise, top)
+        lin = fe.linear(base.joint["K_T"])
+        start = math.log(base.joint["phi_max"] / lin.a_ref)
+        # the base joint may already slip past 1e-3 a_ref (e.g. a weak glue zone): the
+        # lower bound then moves with the start, so the bounds always enclose it
+        return Parameter(p.name, start, min(self.lower, start - 6.0), start + 2.0, p.step,
+                         p.unit, p.description)
+
+    def starts(self, spec):
+        return [spec.start - d for d in (0.0, 2.0, 4.0)]
+
+    def reading(self, p, fe, lin, pred):
+        return {"beta": pred.joint["beta"], "phi_max_m": pred.joint["phi_max"],
+                "F_S_N": pred.joint["F_S"],
+                "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1])}
+
+
+FE_REALIZATION = MacroSlip()

@@ -9,8 +9,11 @@ parameter of its own. Needs the ``response_amplitude`` column and force control.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from inverse.diagnosis.fe_realization import Extension
 from inverse.iwan_modal import kappa_ratio
 
 ID = "nonproportional-amplitude"
@@ -24,8 +27,6 @@ NONLINEAR = [("gamma", -0.95, 0.6, np.linspace(-0.8, 0.4, 9)),
 LINEAR = []
 NONNEG = ()
 EFFECT = None
-#: Slot for the FE realization (filled by the FE level).
-FE_REALIZATION = None
 
 
 def box_cox(log_s, gamma, kappa):
@@ -71,3 +72,33 @@ def testable(obs):
     if obs.log_r is None:
         return False, "needs the response_amplitude column"
     return True, None
+
+
+# --- the FE realization (feloop/: the FE level fits it to the levels) -------------
+# A voltage-driven electrodynamic exciter does not deliver a force proportional to the
+# drive near a resonance and at high drive (force drop-out: Olsen, Sound and Vibration
+# 20(6) (1986) 18; Varoto & de Oliveira, Shock and Vibration 9 (2002) 165). The FRF is
+# measured against the force gauge and stays the structure's own, but the joint
+# amplitude of a level no longer scales with the drive voltage. Realization: the force
+# of level ``v`` is ``force_scale e_v / sqrt(1 + (e_v / e_sat)^2)`` with ``g = 1/e_sat
+# >= 0`` fitted (amplifier/armature compression).
+class ForceCompression(Extension):
+    cause, parameter, unit = "nonproportional-amplitude", "inv_e_sat", "1/excitation unit"
+    fit_order = 50
+    description = "1/e_sat: force = force_scale e / sqrt(1 + (e/e_sat)^2)"
+
+    def step(self, fe, base, noise, top):
+        return 0.1 / float(fe.excitation[top])
+
+    def apply(self, p, fe, lin, scale, forces):
+        g = float(p["inv_e_sat"])
+        return scale, forces / np.sqrt(1.0 + (g * fe.excitation) ** 2), ()
+
+    def reading(self, p, fe, lin, pred):
+        g = float(p[self.parameter])
+        top = float(fe.excitation[-1])
+        return {"e_sat": (1.0 / g) if g > 0 else math.inf,
+                "force_lost_top_level": 1.0 - 1.0 / math.sqrt(1.0 + (g * top) ** 2)}
+
+
+FE_REALIZATION = ForceCompression()

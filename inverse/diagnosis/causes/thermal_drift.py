@@ -12,7 +12,11 @@ its level counting with it (time and amplitude are then one variable:
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from inverse.diagnosis.fe_realization import ALUMINIUM_DLNE_DT, Extension
 
 ID = "thermal-drift"
 ORDER = 40
@@ -25,8 +29,6 @@ NONLINEAR = [("b_drift", -4.0, 40.0, np.array([-2.0, 0.0, 2.0, 5.0, 20.0])),
 LINEAR = ["d"]
 NONNEG = ()
 EFFECT = None
-#: Slot for the FE realization (filled by the FE level).
-FE_REALIZATION = None
 
 
 def drift_shape(t, b):
@@ -69,3 +71,33 @@ def testable(obs):
         return False, ("the levels were run in order of amplitude: a drift with time "
                        "cannot be told from an amplitude effect")
     return True, None
+
+
+# --- the FE realization (feloop/: the FE level fits it to the levels) -------------
+# The modulus drifts with time (exciter coil and room heating the strips): every
+# stiffness (strips and glue) scales by ``1 + d (run - run_1)``; for aluminium ``(1/E)
+# dE/dT ~ -4e-4 /K`` (a handbook value, assumed), so ``d`` reads as a temperature change
+# per run.
+class ThermalDrift(Extension):
+    cause, parameter, unit = "thermal-drift", "drift", "1/run"
+    fit_order = 40
+    description = "relative stiffness change per run (every stiffness alike)"
+    lower, stiffens = -math.inf, True
+
+    def step(self, fe, base, noise, top):
+        span = max(float(np.ptp(fe.run_order)), 1.0)
+        return float(noise.sigma_omega2[0] / base.omega2[0] / span)
+
+    def starts(self, spec):
+        return [0.0, 3.0 * spec.step, -3.0 * spec.step]
+
+    def apply(self, p, fe, lin, scale, forces):
+        run = fe.run_order - fe.run_order.min()
+        return scale * (1.0 + float(p["drift"]) * run), forces, ()
+
+    def reading(self, p, fe, lin, pred):
+        d = float(p[self.parameter])
+        return {"drift_per_run": d, "temperature_change_per_run_K": d / ALUMINIUM_DLNE_DT}
+
+
+FE_REALIZATION = ThermalDrift()
