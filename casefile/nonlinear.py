@@ -14,6 +14,7 @@ import scipy.sparse as sp
 
 from casefile.build import joint_shares
 from casefile.jointed import NonlinearCase
+from casefile.laws import law_keys
 from fe.reduction import JointBank, JointedSystem, ritz_basis
 from ident.errors import InputError
 from joints.iwan import IwanParameters
@@ -27,7 +28,7 @@ DEFAULT_FORCES = np.geomspace(0.01, 10.0, 10)
 def missing_joint_parameters(cf) -> list[str]:
     """``interface.i.key`` of every joint parameter the file leaves to be fitted."""
     return [f"interface.{i}.{k}" for i, itf in enumerate(cf.interfaces)
-            if itf.tangential == "joint" for k in ("chi", "fs", "beta") if getattr(itf, k) is None]
+            if itf.tangential == "joint" for k in law_keys(itf.law) if getattr(itf, k) is None]
 
 
 def joint_parameters(cf) -> list[IwanParameters]:
@@ -51,6 +52,9 @@ def _joint_source(cf) -> str:
 
 def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
     """The case file's jointed model; InputError naming what is missing."""
+    other = [i.law for i in cf.interfaces if i.tangential == "joint" and i.law != "iwan4"]
+    if other:
+        raise InputError(f"{cf.path}: law {other[0]!r}: the nonlinear model takes law iwan4")
     missing = missing_joint_parameters(cf)
     if missing:
         raise InputError(f"{cf.path}: {', '.join(missing)} not given (fitted by update): a "
