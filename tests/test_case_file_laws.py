@@ -192,3 +192,12 @@ def test_an_updated_model_is_refused_for_another_law(tmp_path, capsys):
                  "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "Iwan joints" in err and err.count("\n") == 1
+
+
+def test_every_package_raises_input_faults():
+    """A ValueError raised in any project package is a verdict on the input (exit 2,
+    cli.main.input_fault): casefile, feloop and synthetic included."""
+    from cli.main import PROJECT_PACKAGES
+
+    packages = {p.name for p in ROOT.iterdir() if (p / "__init__.py").exists()} - {"tests"}
+    assert packages <= set(PROJECT_PACKAGES), packages - set(PROJECT_PACKAGES)
