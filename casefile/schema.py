@@ -5,7 +5,8 @@
 keys refused, ``x_`` keys ignored), checks the geometry rules of the spec (ranges inside
 beams, stacked interfaces) and records the *kind* of every parameter: ``given`` (in the
 file), ``default`` (with its source), ``fitted`` (a joint parameter left out: fitted by
-``iwanfe update``); ``calibrated`` is set by :mod:`casefile.calibrate`. SI units.
+``iwanfe update`` for law ``iwan4``); ``calibrated`` is set by :mod:`casefile.calibrate`.
+A joint interface names its law and that law's keys (:mod:`casefile.laws`). SI units.
 
 Beyond the spec: ``[damping] zeta`` (the stuck structure's viscous modal damping ratio,
 used by the nonlinear model; default 0: the joints' own dissipation only), and a support's
@@ -21,6 +22,7 @@ from pathlib import Path
 
 from casefile.spec import (Beam, Calibrate, CaseFile, Interface, Material, Measured,
                                  PointMass, Section, Support)
+from casefile.laws import LAW_KEYS, LAWS, law_keys
 from casefile.tables import CaseFileError, Table
 from ident.units import HINT, suspect
 
@@ -29,7 +31,6 @@ TABLES = ("case", "material", "beam", "support", "interface", "mass", "drive", "
 ARRAYS = ("material", "beam", "support", "interface", "mass", "sensor")
 STACK_TOLERANCE = 1e-6      # m, spec: stacked within 1e-6 m
 DEFAULT_ELEMENT_SIZE = 0.005
-JOINT_PARAMETERS = ("chi", "fs", "beta")
 
 
 def read_case_file(path) -> CaseFile:
@@ -241,24 +242,35 @@ class _Reader:
                     t.fail("joints_at", "two joints at the same x")
             else:
                 joint_elements = t.integer("joint_elements", lo=2)
-            law = t.text("law", choices=("iwan4",))
-            kt = t.number("kt", lo=0, lo_open=True)
-            params = {"chi": t.number("chi", required=False, lo=-1, hi=0, lo_open=True,
-                                      hi_open=True),
-                      "fs": t.number("fs", required=False, lo=0, lo_open=True),
-                      "beta": t.number("beta", required=False, lo=0)}
-            self.given(t, "kt", "joints_at", "joint_elements")
-            for k in JOINT_PARAMETERS:
-                self.kinds[f"{t.label}.{k}"] = (("given", "") if t.has(k)
-                                                else ("fitted", "by iwanfe update"))
+            law, kt, params = self.joint_law(t)
         else:
-            for k in ("joints_at", "joint_elements", "law", "kt", *JOINT_PARAMETERS):
+            for k in ("joints_at", "joint_elements", "law", "kt", *LAW_KEYS):
                 if t.has(k):
                     t.fail(k, f"only a joint interface (tangential = 'joint') has {k}")
         self.given(t, "x")
         self.close(t)
         return Interface((lo.name, up.name), x, normal, tangential, joints_at, joint_elements,
                          law, kt, **params)
+
+    def joint_law(self, t: Table) -> tuple[str, float, dict]:
+        """``(law, kt, its own keys)`` of a joint interface (:mod:`casefile.laws`): a key
+        of another law is one line naming it; a key left out is ``fitted``."""
+        law = t.text("law", choices=tuple(LAWS))
+        own = law_keys(law)
+        for k in LAW_KEYS:
+            if k not in own and t.has(k):
+                others = ", ".join(n for n in LAWS if k in law_keys(n))
+                t.fail(k, f"not a key of law {law!r} (its keys: kt, {', '.join(own)}; "
+                          f"{k} belongs to {others})")
+        kt = t.number("kt", lo=0, lo_open=True)
+        params = {k.name: k.read(t) for k in LAWS[law]}
+        self.given(t, "kt", "joints_at", "joint_elements")
+        fitted = ("fitted", "by iwanfe update") if law == "iwan4" else (
+            "fitted", f"left to be fitted: iwanfe update fits law iwan4 only, so backbone "
+                      f"and ringdown need it given")
+        for k in own:
+            self.kinds[f"{t.label}.{k}"] = ("given", "") if t.has(k) else fitted
+        return law, kt, params
 
     def point(self, t: Table, by_name: dict, kind: str) -> PointMass:
         beam = self.on_beam(t, by_name)

@@ -61,9 +61,11 @@ class Interface:
     joint_elements: int | None = None
     law: str | None = None
     kt: float | None = None
-    chi: float | None = None
-    fs: float | None = None
-    beta: float | None = None
+    chi: float | None = None      # iwan4
+    fs: float | None = None       # iwan4, jenkins, bouc-wen (N)
+    beta: float | None = None     # iwan4
+    alpha: float | None = None    # bouc-wen
+    shape: float | None = None    # bouc-wen
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,12 @@
 """The model summary of a case file (``iwanfe case check FILE``): mass, first modes, the
-joint elements with their stiffness shares, and the kind of every parameter (given,
-calibrated, fitted, default with its source). SI units, Hz."""
+joint elements with their stiffness shares, each joint interface's law with the kind of
+each of its parameters, and the kind of every parameter (given, calibrated, fitted,
+default with its source). SI units, Hz."""
 from __future__ import annotations
 
 import numpy as np
 
+from casefile.laws import DESCRIPTION, LAWS
 from casefile.nonlinear import missing_joint_parameters
 
 _ARRAYS = {"material": "materials", "beam": "beams", "support": "supports",
@@ -24,6 +26,21 @@ def parameter_value(cf, address: str):
         item, parts = item.sections[int(parts[3])], parts[2:]
     v = getattr(item, parts[2])
     return list(v) if isinstance(v, tuple) else v
+
+
+def joint_laws(cf) -> list[dict]:
+    """Per joint interface: its ``law``, what it is, and ``kt`` and the law's own keys
+    with ``value`` (None: left out), ``unit`` and ``kind`` (given, calibrated, fitted)."""
+    out = []
+    for i, itf in enumerate(cf.interfaces):
+        if itf.tangential != "joint":
+            continue
+        keys = [("kt", "N/m")] + [(k.name, k.unit) for k in LAWS[itf.law]]
+        out.append({"interface": i, "law": itf.law, "description": DESCRIPTION[itf.law],
+                    "parameters": [{"key": k, "value": getattr(itf, k), "unit": u,
+                                    "kind": cf.kinds.get(f"interface.{i}.{k}", ("given",))[0]}
+                                   for k, u in keys]})
+    return out
 
 
 def case_summary(cf, built, calibration, n_modes: int = 6) -> dict:
@@ -47,7 +64,7 @@ def case_summary(cf, built, calibration, n_modes: int = 6) -> dict:
         "modes": modes, "joints": built.joint_table,
         "joint_stiffness_total": float(model.joint_stiffness.sum()),
         "parameters": params, "calibration": calibration,
-        "fitted_by_update": missing_joint_parameters(cf),
+        "joint_laws": joint_laws(cf), "fitted_by_update": missing_joint_parameters(cf),
     }
 
 
@@ -66,6 +83,12 @@ def format_summary(s: dict) -> str:
     for j in s["joints"]:
         lines.append(f"  interface {j['interface']}  x = {j['x_m']:.6g} m  share "
                      f"{j['share']:.4f}  k = {j['k_N_per_m']:.6g} N/m")
+    for law in s.get("joint_laws", []):
+        keys = ", ".join(f"{p['key']} = " + ("-" if p["value"] is None else f"{p['value']:.6g}"
+                                              + ("" if p["unit"] == "1" else f" {p['unit']}"))
+                         + f" {p['kind']}" for p in law["parameters"])
+        lines.append(f"joint law of interface {law['interface']}: {law['law']} "
+                     f"({law['description']} per joint element): {keys}")
     cal = s["calibration"]
     if cal:
         for p in cal["parameters"]:

@@ -1,7 +1,9 @@
 """One face per case: its model, measured data, nonlinear model and what it can do.
 
 A command asks a :class:`Case` for a capability (:meth:`Case.require`); a case that lacks
-it is a one-line :class:`ident.errors.InputError` naming the case and what it offers.
+it is a one-line :class:`ident.errors.InputError` naming the case and what it offers, or
+the case's own reason when it refuses the capability (:attr:`Case.refused`: a case file
+whose joint law the FE loop does not fit).
 Cases come from :mod:`cases.registry` (a shipped name or a case file).
 """
 from __future__ import annotations
@@ -36,6 +38,7 @@ class Case:
     source: str
     builders: dict = field(default_factory=dict)
     file: object = None          # the checked case file, when the case is one
+    refused: dict = field(default_factory=dict)   # capability -> why not (one line)
 
     @property
     def capabilities(self) -> tuple:
@@ -43,6 +46,8 @@ class Case:
 
     def require(self, capability: str) -> Callable:
         """The builder of ``capability``, or InputError (one line)."""
+        if capability in self.refused:
+            raise InputError(self.refused[capability])
         if capability not in self.builders:
             offers = ", ".join(self.capabilities) or "nothing"
             raise InputError(f"case {self.name!r} has no {CAPABILITIES[capability]} "

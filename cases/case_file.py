@@ -1,8 +1,10 @@
 """A case file as a :class:`cases.case.Case`: the FE model (calibrated, or at the file's
 values), the measured data it names, its nonlinear model when every joint parameter is
-given, its summary, and (joint interfaces with law ``iwan4`` and their ``kt``, a drive
-and a measured-data table) its FE-levels model and ``update``
-(:mod:`feloop.case_file`)."""
+given (any joint law, :mod:`casefile.laws`), its summary, and (joint interfaces with law
+``iwan4`` and their ``kt``, a drive and a measured-data table) its FE-levels model and
+``update`` (:mod:`feloop.case_file`). A file of another law refuses ``update``,
+``fe_levels`` and ``fe_uncertainty`` in one line that says which commands take its law
+(:func:`feloop.case_file.refusal`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -50,5 +52,7 @@ def case_from_file(path, model=None) -> Case:
         builders["fe_levels"] = fe_loop.levels_builder(cf)
         builders["update"] = fe_loop.update_builder(cf)
         builders["fe_uncertainty"] = fe_loop.uncertainty_builder(cf)
+    why = fe_loop.refusal(cf)
+    refused = {c: why for c in ("update", "fe_levels", "fe_uncertainty")} if why else {}
     return Case(name=cf.name, description=cf.description, source=str(cf.path),
-                builders=builders, file=cf)
+                builders=builders, file=cf, refused=refused)

@@ -72,7 +72,7 @@ def _plot(path, case, ident, cmp, start_amp) -> None:
     from viz.backbone_plot import plot_backbones
 
     bb = cmp["backbone"]
-    curves = [{"label": "EPMC backbone (bank path)", "style": "-",
+    curves = [{"label": f"EPMC backbone ({bb['path']} path)", "style": "-",
                "amplitude": bb["amplitude_m"], "frequency_hz": bb["frequency_hz"],
                "zeta": bb["zeta"]},
               {"label": "ring-down, identified", "style": ".",

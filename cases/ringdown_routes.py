@@ -2,8 +2,9 @@
 response-controlled virtual test.
 
 Three routes to the mode's frequency and damping ratio against the drive-point
-amplitude (first-harmonic displacement amplitude, m), all on the Jenkins banks the
-integration uses:
+amplitude (first-harmonic displacement amplitude, m), all on the joints the integration
+uses (:attr:`casefile.jointed.NonlinearCase.time_path`: the Jenkins banks, or a law
+without banks through its exact first harmonic):
 
 * ``ringdown``: the free-decay record (:mod:`cases.ringdown_study`) identified by the
   measured-record route (:mod:`ident.free_decay`: band-pass, Hilbert envelope and phase,
@@ -110,7 +111,8 @@ def compare_ringdown(case, ident: dict, start_amplitude: float, lo: float = 0.05
                          f"{hi:g} x the start amplitude")
     a_lo, a_hi = float(amp[win].min()), float(amp[win].max())
     grid = np.geomspace(0.9 * a_lo, 1.1 * a_hi, n_backbone)
-    bb = epmc_backbone(case.model, case.joint_harmonics("bank"), case.mode, grid,
+    path = case.time_path              # the joints the integration used
+    bb = epmc_backbone(case.model, case.joint_harmonics(path), case.mode, grid,
                        at=case.drive_dof)
     ref = bb.at(amp[win])
     f_bb, z_bb = np.sqrt(ref["omega2"]) / (2 * np.pi), ref["zeta"]
@@ -122,7 +124,7 @@ def compare_ringdown(case, ident: dict, start_amplitude: float, lo: float = 0.05
     response = []
     if n_response > 0:
         held = np.geomspace(a_lo, a_hi, n_response)
-        data, _ = response_route(case, held, path="bank", progress=progress, store=store)
+        data, _ = response_route(case, held, path=path, progress=progress, store=store)
         ref_r = bb.at(held)
         for i, a in enumerate(held):
             f, fb = float(data.omega_hz[i]), float(np.sqrt(ref_r["omega2"][i]) / (2 * np.pi))
@@ -144,7 +146,7 @@ def compare_ringdown(case, ident: dict, start_amplitude: float, lo: float = 0.05
             "rows": rows, "response": response, "max_deviation": dev,
             "targets": {"frequency": FREQUENCY_TARGET, "zeta": ZETA_TARGET}, "met": bool(met),
             "backbone": {"amplitude_m": bb.amplitude, "frequency_hz": bb.frequency_hz,
-                         "zeta": bb.zeta, "path": "bank", "points": len(bb)}}
+                         "zeta": bb.zeta, "path": path, "points": len(bb)}}
 
 
 def comparison_rows(cmp: dict) -> list[str]:

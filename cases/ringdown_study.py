@@ -1,8 +1,10 @@
 """``iwanfe ringdown``: a simulated free decay of a case's mode, written as a test record.
 
 The shaker switched off at phase resonance: the mode's periodic orbit at the start
-amplitude (a point of its EPMC backbone on the Jenkins-bank path, the joints the
-integration uses: :func:`fe.epmc.solve_epmc`, Krack 2015) is the initial state, or an
+amplitude (a point of its EPMC backbone on the joints the integration uses,
+:attr:`casefile.jointed.NonlinearCase.time_law`: the Jenkins-bank path, or for a law with
+no bank (Bouc-Wen) its exact first harmonic and its own step, no energy balance;
+:func:`fe.epmc.solve_epmc`, Krack 2015) is the initial state, or an
 impulse at the drive point (:func:`runs.ringdown.impulse_start`) scaled so that the
 stuck-joint mode would reach the start amplitude. :func:`runs.ringdown.ring_down`
 integrates the reduced model with its joints (average-acceleration rule, pre-warped
@@ -74,11 +76,21 @@ def settings_hash(case, settings: RingdownSettings) -> str:
     is reused only if it matches)."""
     h = hashlib.sha256()
     m, b = case.model, case.bank
-    for a in (m.basis, m.M, m.K, m.C, m.G, m.K_T, b.stiffness, b.slip_limit):
+    joints = (b.stiffness, b.slip_limit) if b is not None else law_arrays(case.time_law)
+    for a in (m.basis, m.M, m.K, m.C, m.G, m.K_T, *joints):
         h.update(np.ascontiguousarray(a).tobytes())
     h.update(json.dumps(asdict(settings), sort_keys=True).encode())
     h.update(f"{case.name}:{case.drive_dof}:{case.response_dof}".encode())
     return h.hexdigest()
+
+
+def law_arrays(law) -> tuple:
+    """The arrays that define a joint law other than a bank (its class name, ``K_T`` and
+    every per-joint parameter array it holds), for the record's hash."""
+    arrays = [np.frombuffer(type(law).__name__.encode(), dtype=np.uint8)]
+    arrays += [np.asarray(v, dtype=float) for k, v in sorted(vars(law).items())
+               if isinstance(v, np.ndarray)]
+    return tuple(arrays)
 
 
 def write_record_header(path, points) -> None:
@@ -100,11 +112,12 @@ def append_record_rows(path, time_s, response) -> None:
 
 
 def _start_state(case, settings, dt):
-    """Initial state and what it is: the EPMC orbit (bank path) at the start amplitude, or
-    an impulse at the drive point."""
-    from fe.epmc import linear_mode, solve_epmc
+    """Initial state and what it is: the EPMC orbit (the time domain's path: banks, or the
+    law's exact first harmonic) at the start amplitude, or an impulse at the drive
+    point."""
+    from fe.epmc import linear_mode
 
-    model, bank = case.model, case.bank
+    model, bank = case.model, case.time_law
     w0, phi = linear_mode(model, settings.mode)
     gphi = np.abs(model.G @ phi)
     j = int(np.argmax(gphi))
@@ -115,14 +128,39 @@ def _start_state(case, settings, dt):
         return impulse_start(model, bank, load, impulse), {
             "start": "impulse", "impulse_Ns": float(impulse), "joint": j + 1,
             "slip_m": slip}
+    pt, how = _start_orbit(case, settings.mode, slip)
+    state = orbit_start(model, bank, pt.harmonics, pt.q[-1], float(pt.omega[-1]), dt,
+                        case.n_time)
+    return state, {"start": "orbit", "path": case.time_path, "joint": j + 1, "slip_m": slip,
+                   "drive_amplitude_m": float(pt.dof_amplitude(case.drive_dof)[-1]),
+                   "frequency_hz": float(pt.frequency_hz[-1]), "zeta": float(pt.zeta[-1]),
+                   **({"reached": how} if how else {})}
+
+
+#: points of the continuation that reaches a start orbit a cold start does not
+START_CONTINUATION = 24
+
+
+def _start_orbit(case, mode: int, slip: float):
+    """The EPMC point at ``slip`` (its last point is the orbit) and how it was reached:
+    solved there (``None``), or, when that cold start fails (one Jenkins slider per joint
+    on the bank path: a force with kinks), continued from a hundredth of the slip
+    (:data:`START_CONTINUATION` points; said in the record). RuntimeError otherwise."""
+    from fe.epmc import epmc_backbone, solve_epmc
+
+    model, joints = case.model, case.joint_harmonics(case.time_path)
     try:
-        pt = solve_epmc(model, case.joint_harmonics("bank"), settings.mode, slip)
+        return solve_epmc(model, joints, mode, slip), None
     except RuntimeError as exc:
-        raise RuntimeError(f"start orbit: {exc}") from None
-    state = orbit_start(model, bank, pt.harmonics, pt.q[0], float(pt.omega[0]), dt, case.n_time)
-    return state, {"start": "orbit", "joint": j + 1, "slip_m": slip,
-                   "drive_amplitude_m": float(pt.dof_amplitude(case.drive_dof)[0]),
-                   "frequency_hz": float(pt.frequency_hz[0]), "zeta": float(pt.zeta[0])}
+        cold = str(exc)
+    try:
+        pt = epmc_backbone(model, joints, mode, np.geomspace(1e-2 * slip, slip,
+                                                              START_CONTINUATION))
+    except RuntimeError as exc:
+        raise RuntimeError(f"start orbit: {cold}; continued from 0.01 x the slip: "
+                           f"{exc}") from None
+    return pt, (f"continued over {START_CONTINUATION} points from 0.01 x the slip (a cold "
+                f"start did not converge: {cold})")
 
 
 def simulate_ringdown(case, settings: RingdownSettings, out: Path | None = None,
@@ -161,7 +199,7 @@ def simulate_ringdown(case, settings: RingdownSettings, out: Path | None = None,
     else:
         on_chunk = None
     t0 = time.perf_counter()
-    rec = ring_down(model, case.bank, state, w0, settings.cycles, outputs, points,
+    rec = ring_down(model, case.time_law, state, w0, settings.cycles, outputs, points,
                     settings.steps_per_period, progress=progress, on_chunk=on_chunk,
                     start=settings.start)
     elapsed = time.perf_counter() - t0
@@ -171,10 +209,11 @@ def simulate_ringdown(case, settings: RingdownSettings, out: Path | None = None,
             "omega0_rad_s": float(w0), "dt_integration_s": rec.dt_integration,
             "dt_record_s": float(dt_rec), "samples": int(rec.time_s.size),
             "drive_dof": int(case.drive_dof), "response_dof": int(case.response_dof),
-            "energy_J": {"viscous": e.viscous, "joint_dissipation": e.joint_dissipation,
-                         "kinetic_change": e.kinetic, "strain_change": e.strain,
-                         "joint_stored_change": e.joint_stored, "residual": e.residual,
-                         "relative_residual": e.relative_residual},
+            "energy_J": None if e is None else {
+                "viscous": e.viscous, "joint_dissipation": e.joint_dissipation,
+                "kinetic_change": e.kinetic, "strain_change": e.strain,
+                "joint_stored_change": e.joint_stored, "residual": e.residual,
+                "relative_residual": e.relative_residual},
             "newton_iterations": rec.newton_iterations, "integration_s": elapsed}
     if out is not None:
         np.savez(Path(out) / "record.tmp.npz", slip=rec.slip)
@@ -205,10 +244,11 @@ def _load_record(out: Path, digest: str):
     e = info["energy_J"]
     with np.load(slip) as d:
         s = d["slip"]
+    energy = None if e is None else EnergyBalance(
+        0.0, e["viscous"], e["joint_dissipation"], e["kinetic_change"], e["strain_change"],
+        e["joint_stored_change"])
     rec = FreeDecayRecord(time_s=data[:, 0], response=data[:, 1:], points=("drive", "response"),
-                          slip=s, energy=EnergyBalance(0.0, e["viscous"], e["joint_dissipation"],
-                                                       e["kinetic_change"], e["strain_change"],
-                                                       e["joint_stored_change"]),
+                          slip=s, energy=energy,
                           dt_integration=info["dt_integration_s"],
                           steps_per_period=info["settings"]["steps_per_period"],
                           omega0=info["omega0_rad_s"], start=info["settings"]["start"],

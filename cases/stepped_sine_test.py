@@ -14,6 +14,13 @@ from the seed. The joints keep the file's ``kt``, ``fs``, ``beta`` and take the 
 top level's linear slip at ``TOP_SLIP`` phi_max (micro-slip only: the hidden effect is
 ``none``).
 
+Another law (:mod:`casefile.laws`) keeps every parameter the file gives (the seed draws
+the noise only) and its top level's linear slip is ``TOP_SLIP_OTHER`` slip scales (a
+Jenkins slider is linear below its slip): ``jenkins`` runs the same multi-harmonic
+stepped sine on its own bank (one slider per joint element); ``bouc-wen``, which has no
+AFT march, is solved line by line by first-harmonic balance with its describing
+function (:func:`fe.hb_exact.continuation_exact`); both identified by LSCF as above.
+
 ``python -m cases.stepped_sine_test CASE.toml OUT.csv SEED`` writes the table
 (``x_source = simulated``; the seeded chi only printed) and prints the truth. SI units.
 """
@@ -34,6 +41,8 @@ from runs.stepped_sine import run_campaign
 
 CHI_RANGE = (-0.7, -0.25)
 TOP_SLIP = 0.4
+#: the top level's linear slip of another law, in its slip scale
+TOP_SLIP_OTHER = 4.0
 #: smallest slider slip of the Jenkins banks, in phi_max (below the level-1 slip)
 BANK_LOW = 1e-5
 SIGMA_OMEGA2, SIGMA_ZETA = 1e-5, 5e-4
@@ -43,17 +52,42 @@ HB = HBSettings(n_harmonics=5, n_time=64, odd_only=True)
 BAND_HALF_POWER, LINES = 3.0, 41
 
 
+def _receptance(nc, red, load, lines, force):
+    """(receptance (levels, lines) at the response DOF, fallback summary): the multi-
+    harmonic stepped sine on the banks (an Iwan law's, 8 per octave, or the law's own),
+    or first-harmonic balance line by line for a law without banks (module docstring)."""
+    if nc.law_name == "iwan4" or nc.bank is not None:
+        bank = JointBank.log_spaced(nc.joints, BANK_LOW * nc.phi_max, 8) \
+            if nc.law_name == "iwan4" else nc.bank
+        camp = Campaign(lines, force, load, np.array([nc.response_dof]), HBProtocol(HB))
+        res = run_campaign(red, bank, camp, progress=False)
+        return res.receptance[:, :, 0], res.fallback_summary()
+    from fe.hb_exact import continuation_exact
+
+    unit, rec, words = red.load(load), [], []
+    for lv, F in enumerate(force):
+        sols = continuation_exact(red, nc.joints, unit * F, 2 * np.pi * lines)
+        rec.append([s.first_harmonic(red)[nc.response_dof] / F for s in sols])
+        hit = [s.fallback for s in sols if s.fallback]
+        if hit:
+            words.append(f"level {lv + 1} (F = {F:.4g} N): {len(hit)} of {len(sols)} lines, "
+                         f"first: {hit[0]}")
+    return np.array(rec), "; ".join(words) or "none"
+
+
 def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
     """(table, truth) of :class:`cases.case.Case` ``case`` (a case file with joints and
     ``[measured] mode``) for ``seed`` (module docstring)."""
-    from casefile.nonlinear import nonlinear_case
+    from casefile.nonlinear import file_law, nonlinear_case
 
     rng = np.random.default_rng(seed)
-    chi = float(rng.uniform(*CHI_RANGE))
     cf, _ = case.builders["calibrated_file"]()
-    itfs = tuple(dataclasses.replace(i, chi=chi) if i.tangential == "joint" else i
-                 for i in cf.interfaces)
-    cf = dataclasses.replace(cf, interfaces=itfs)
+    iwan = file_law(cf) == "iwan4"
+    chi = float(rng.uniform(*CHI_RANGE)) if iwan else None
+    if iwan:
+        cf = dataclasses.replace(cf, interfaces=tuple(
+            dataclasses.replace(i, chi=chi) if i.tangential == "joint" else i
+            for i in cf.interfaces))
     model = case.fe_model()
     nc = nonlinear_case(cf, model)
     red, k = nc.model, nc.mode - 1
@@ -64,14 +98,12 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
     load[nc.drive_dof] = 1.0
     slip_per_n = float(np.max(np.abs(model.slip_matrix @ phi))) * abs(phi[nc.drive_dof]) \
         / (2.0 * zeta * omega ** 2)          # linear modal slip at resonance per N
-    force = TOP_SLIP * nc.phi_max / slip_per_n * 2.0 ** (np.arange(10) - 9.0)
-    bank = JointBank.log_spaced(nc.joints, BANK_LOW * nc.phi_max, 8)
+    top = TOP_SLIP if iwan else TOP_SLIP_OTHER
+    force = top * nc.phi_max / slip_per_n * 2.0 ** (np.arange(10) - 9.0)
     f0 = omega / (2 * math.pi)
     hp = 2.0 * zeta * f0
     lines = np.linspace(f0 - BAND_HALF_POWER * hp, f0 + 0.5 * BAND_HALF_POWER * hp, LINES)
-    camp = Campaign(lines, force, load, np.array([nc.response_dof]), HBProtocol(HB))
-    res = run_campaign(red, bank, camp, progress=False)
-    rec = res.receptance[:, :, 0]
+    rec, fallbacks = _receptance(nc, red, load, lines, force)
     om2, ze = np.empty(force.size), np.empty(force.size)
     for lv in range(force.size):
         modes = identify_modes(lines, rec[lv], band=(lines[0], lines[-1]),
@@ -88,9 +120,10 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
                         zeta=ze * (1.0 + SIGMA_ZETA * rng.standard_normal(n)),
                         mode=np.full(n, int(label)), run_order=run_order,
                         extra={"x_source": np.full(n, "simulated")})
-    return data, {"chi": chi, "zeta_v": zeta, "f0_hz": f0, "phi_max": nc.phi_max,
-                  "top_slip_over_phi_max": TOP_SLIP, "forces_N": force.tolist(),
-                  "fallbacks": res.fallback_summary()}
+    truth = {"chi": chi} if iwan else {"law": nc.law_name, "joints": nc.joint_source}
+    return data, {**truth, "zeta_v": zeta, "f0_hz": f0, "phi_max": nc.phi_max,
+                  "top_slip_over_phi_max": top, "forces_N": force.tolist(),
+                  "fallbacks": fallbacks}
 
 
 def main(argv=None) -> int:

@@ -1,5 +1,6 @@
-"""A virtual stepped-sine test of a case file's jointed model: the phase resonance of one
-mode at every force level through the exact describing function
+"""A virtual stepped-sine test of a case file's jointed model (any joint law of the file,
+:mod:`casefile.laws`): the phase resonance of one mode at every force level through the
+law's exact describing function
 (:func:`fe.hb_resonance.resonance_levels`, first harmonic), written as a measured-data
 table labelled as simulated (``x_source = simulated``). SI units.
 

@@ -135,7 +135,8 @@ def _one_line(prefix: str, exc: BaseException) -> str:
 
 
 #: Top-level packages whose own ``ValueError`` is a verdict on the input.
-PROJECT_PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "cases", "cli", "viz")
+PROJECT_PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "viz", "synthetic", "casefile",
+                    "feloop", "cases", "cli")
 _ROOT = Path(__file__).resolve().parents[1]
 
 

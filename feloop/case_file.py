@@ -27,8 +27,12 @@ from casefile.parameters import get_parameter, set_parameter
 from casefile.plausibility import joint_plausibility
 from ident.errors import InputError
 
-__all__ = ["qualifies", "levels_builder", "assumption_variants", "update_builder",
-           "fitted_plausibility", "uncertainty_builder"]
+__all__ = ["qualifies", "refusal", "levels_builder", "assumption_variants",
+           "update_builder", "fitted_plausibility", "uncertainty_builder"]
+
+#: what a case file of a law other than ``iwan4`` runs (the FE loop fits Iwan joints)
+OTHER_LAW_COMMANDS = ("case check, modes, convergence, render, export, backbone, ringdown "
+                      "and the virtual tests (cases.virtual_test, cases.stepped_sine_test)")
 
 
 def qualifies(cf) -> bool:
@@ -36,6 +40,20 @@ def qualifies(cf) -> bool:
     joints = [i for i in cf.interfaces if i.tangential == "joint"]
     return bool(joints) and all(i.law == "iwan4" and i.kt for i in joints) \
         and cf.drive is not None and cf.measured is not None and bool(cf.measured.files)
+
+
+def refusal(cf) -> str | None:
+    """Why the FE loop (``update``, ``diagnose --case``, ``loop``, ``uncertainty``,
+    ``--backbone``) refuses the file: one line naming its first joint interface of a law
+    other than ``iwan4`` and the commands that take that law; None when all are iwan4."""
+    other = [(k, i.law) for k, i in enumerate(cf.interfaces)
+             if i.tangential == "joint" and i.law != "iwan4"]
+    if not other:
+        return None
+    k, law = other[0]
+    return (f"{cf.path}: [interface.{k}] law = {law!r}: update, diagnose --case, loop, "
+            f"uncertainty and --backbone fit Iwan joints (law 'iwan4') only; a {law} file "
+            f"runs {OTHER_LAW_COMMANDS}")
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ import json
 from pathlib import Path
 
 from casefile.calibrate import calibrate
+from feloop.case_file import refusal
 from feloop.case_levels import total_kt
 from ident.errors import InputError
 
@@ -52,6 +53,9 @@ def updated_file(cf, model_path):
         raise InputError(f"{where}: not a JSON file: {exc}") from None
     if not isinstance(doc, dict):
         raise InputError(f"{where}: not an updated_model.json of iwanfe update")
+    why = refusal(cf)
+    if why:                               # update fits Iwan joints only
+        raise InputError(f"{where}: an updated model holds Iwan joints; {why}")
     if doc.get("case") != cf.name:
         raise InputError(f"{where}: the update of case {doc.get('case')!r}, not of {cf.name!r}")
     if doc.get("cause", "none") != "none":

@@ -33,11 +33,14 @@ import numpy as np
 from fe.harmonic_balance import HBOperator, HBSettings, HBSolution, natural_continuation
 from fe.joint_harmonics import joint_path
 from fe.newton_path import SteadyStateError, damped_newton, stall_words
-from fe.reduction import ReducedModel
+from fe.reduction import JointBank, ReducedModel
+from joints.bouc_wen import BoucWenJoints, BoucWenParameters
+from joints.describing import IwanJoints
 from joints.iwan import IwanParameters
+from joints.law import JointLaw
 
 __all__ = ["ControlledSolution", "solve_response_controlled", "ResponseControlProtocol",
-           "line_forces"]
+           "law_rows", "rows_law", "line_forces"]
 
 
 @dataclass
@@ -172,8 +175,10 @@ class ResponseControlProtocol:
     (the campaign's ``force`` holds the held amplitudes, m).
 
     ``path``: ``"bank"`` (the campaign's Jenkins banks, harmonics and AFT samples of
-    ``settings``) or ``"exact"`` (first harmonic, continuous Iwan joints ``exact_joints``:
-    one ``(chi, K_T, F_S, beta)`` per joint).
+    ``settings``) or ``"exact"`` (first harmonic, the joints ``exact_joints``: one
+    ``(chi, K_T, F_S, beta)`` per continuous Iwan joint, or rows naming another law,
+    ``("bouc-wen", K_T, F_S, alpha, shape)`` or ``("jenkins", stiffnesses, slip limits)``
+    per joint: :func:`law_rows`).
     """
 
     dof: int
@@ -184,14 +189,14 @@ class ResponseControlProtocol:
 
     @classmethod
     def exact(cls, dof: int, joints, settings: HBSettings = HBSettings()):
-        """The exact path with ``joints`` (sequence of IwanParameters)."""
-        return cls(int(dof), "exact", settings,
-                   tuple((p.chi, p.K_T, p.F_S, p.beta) for p in joints))
+        """The exact path with ``joints`` (sequence of IwanParameters, or a joint law:
+        :func:`law_rows`)."""
+        return cls(int(dof), "exact", settings, law_rows(joints))
 
     def joint_harmonics(self, bank):
         if self.path == "exact":
-            joints = [IwanParameters(*row) for row in self.exact_joints]
-            return joint_path("exact", joints=joints, n_joints=len(joints))
+            joints = rows_law(self.exact_joints)
+            return joint_path("exact", joints=joints, n_joints=len(self.exact_joints))
         return joint_path(self.path, bank=bank, harmonics=self.settings.harmonics,
                           n_time=self.settings.n_time)
 
@@ -212,6 +217,32 @@ class ResponseControlProtocol:
         amp = np.array([x.slip_amplitude for x in sols])
         work = np.array([x.iterations for x in sols], dtype=float)
         return rec, slip, amp, work, [x.fallback for x in sols]
+
+
+def law_rows(joints) -> tuple:
+    """The joints as plain rows (hashable into a campaign's hash): Iwan parameters as
+    ``(chi, K_T, F_S, beta)``, a Bouc-Wen law as ``("bouc-wen", K_T, F_S, alpha, shape)``
+    and a Jenkins bank as ``("jenkins", stiffnesses, slip limits)`` per joint."""
+    if isinstance(joints, BoucWenJoints):
+        return tuple(("bouc-wen", p.K_T, p.F_S, p.alpha, p.shape) for p in joints.params)
+    if isinstance(joints, JointBank):
+        return tuple(("jenkins", tuple(map(float, k)), tuple(map(float, phi)))
+                     for k, phi in zip(joints.stiffness, joints.slip_limit))
+    if isinstance(joints, IwanJoints):
+        joints = joints.params
+    if isinstance(joints, JointLaw):
+        raise ValueError(f"response control: no rows for the joint law {joints.name!r}")
+    return tuple((p.chi, p.K_T, p.F_S, p.beta) for p in joints)
+
+
+def rows_law(rows):
+    """The joints of :func:`law_rows`' ``rows`` (Iwan parameters, or the law)."""
+    tag = rows[0][0] if rows else None
+    if tag == "bouc-wen":
+        return BoucWenJoints([BoucWenParameters(*r[1:]) for r in rows])
+    if tag == "jenkins":
+        return JointBank(np.array([r[1] for r in rows]), np.array([r[2] for r in rows]))
+    return [IwanParameters(*row) for row in rows]
 
 
 def line_forces(result, campaign) -> np.ndarray:

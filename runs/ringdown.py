@@ -42,8 +42,10 @@ import numpy as np
 
 from fe.newmark import EnergyBalance, NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
+from joints.law import JointLaw
 
-__all__ = ["FreeDecayRecord", "orbit_start", "impulse_start", "warped_step", "ring_down"]
+__all__ = ["FreeDecayRecord", "orbit_start", "law_orbit_state", "impulse_start",
+           "warped_step", "ring_down"]
 
 
 @dataclass
@@ -56,7 +58,8 @@ class FreeDecayRecord:
     response : (n, n_points) displacements at the output points (m).
     points : names of the output points (columns of the record).
     slip : (n, n_joints) joint slips (m).
-    energy : the energy balance over the whole record.
+    energy : the energy balance over the whole record (None for a joint law other than
+        a Jenkins bank: only the bank states its stored energy and friction work).
     dt_integration : the step integrated (s); ``steps_per_period``: per period of ``w0``.
     omega0 : the stuck-joint frequency (rad/s) the time axis is warped for.
     start : how the decay started (``orbit`` or ``impulse``).
@@ -67,7 +70,7 @@ class FreeDecayRecord:
     response: np.ndarray
     points: tuple
     slip: np.ndarray
-    energy: EnergyBalance
+    energy: EnergyBalance | None
     dt_integration: float
     steps_per_period: int
     omega0: float
@@ -75,15 +78,55 @@ class FreeDecayRecord:
     newton_iterations: int = 0
 
 
-def orbit_start(model: ReducedModel, bank: JointBank, harmonics, q_harmonics, omega: float,
+def orbit_start(model: ReducedModel, bank: JointLaw, harmonics, q_harmonics, omega: float,
                 dt: float, n_time: int = 256) -> NewmarkState:
     """State at phase 0 of the orbit ``q(t) = Re sum_h Q_h e^{i h omega t}`` (e.g. one
     point of :class:`fe.backbone.Backbone`: ``harmonics``, ``q[i]``, ``omega[i]``) with no
     load: :meth:`fe.newmark.NewmarkState.periodic`, the velocity consistent with the
     integrator's step ``dt`` (s) and the slider anchors of the loop on ``n_time``
-    samples."""
+    samples. Another joint law than a Jenkins bank (a first-harmonic orbit of the exact
+    path): :func:`law_orbit_state`."""
+    if not isinstance(bank, JointBank):
+        return law_orbit_state(model, bank, harmonics, q_harmonics, omega, dt)
     return NewmarkState.periodic(model, bank, harmonics, q_harmonics, omega,
                                  np.zeros(model.n_reduced), n_time, dt)
+
+
+#: cycles of slip between the loop's turning points at most, to reach the steady loop
+LOOP_CYCLES = 10_000
+
+
+def law_orbit_state(model: ReducedModel, law: JointLaw, harmonics, q_harmonics,
+                    omega: float, dt: float) -> NewmarkState:
+    """:func:`orbit_start` for any joint law on a first-harmonic orbit (the exact path):
+    each joint's slip ``Re(S e^{i omega t})`` swings between ``-|S|`` and ``|S|``, so the
+    law's own step is marched between those turning points (exact steps along monotone
+    slip) from its virgin state until the force at ``-|S|`` repeats to 1e-12 relative
+    (at most :data:`LOOP_CYCLES` cycles: the loop's state is the fixed point of one
+    cycle), then to the slip at phase 0 along the branch the orbit is on there
+    (loading when ``ds/dt > 0``)."""
+    h = np.asarray(harmonics, dtype=float)
+    Q = np.asarray(q_harmonics, dtype=complex)
+    if not np.array_equal(h, [1.0]):
+        raise ValueError(f"law {getattr(law, 'name', '?')}: an orbit start needs a "
+                         "first-harmonic orbit (the exact path)")
+    S = model.G @ Q[0]
+    A, s0 = np.abs(S), S.real
+    loading = S.imag < 0.0                      # ds/dt = -omega Im S at t = 0
+    state, last = law.initial_state(), None
+    for _ in range(LOOP_CYCLES):
+        _, _, state = law.step(A, state)
+        F, _, state = law.step(-A, state)
+        if last is not None and np.all(np.abs(F - last) <= 1e-12 * np.abs(F).max()):
+            break
+        last = F
+    _, _, state = law.step(np.where(loading, -A, A), state)
+    F, _, state = law.step(s0, state)
+    q = np.real(Q[0])
+    v = np.real(1j * (2.0 / dt) * np.tan(0.5 * omega * dt) * Q[0])
+    g = F - model.K_T * s0
+    a = np.linalg.solve(model.M, -model.C @ v - model.K @ q - model.G.T @ g)
+    return NewmarkState(t=0.0, q=q, v=v, a=a, anchor=state, g=g, e=1.0)
 
 
 def impulse_start(model: ReducedModel, bank: JointBank, load, impulse: float) -> NewmarkState:
@@ -115,7 +158,9 @@ def ring_down(model: ReducedModel, bank: JointBank, state: NewmarkState, omega0:
 
     Parameters
     ----------
-    model, bank : the reduced model and its joints (``bank.K_T == model.K_T``).
+    model, bank : the reduced model and its joints (``bank.K_T == model.K_T``): Jenkins
+        banks (compiled, energy balance) or any :class:`joints.law.JointLaw` (its own
+        step in the plain loop, no energy balance).
     state : NewmarkState, the start (:func:`orbit_start`, :func:`impulse_start`; its
         velocity should be consistent with :func:`warped_step`'s ``dt_integration``).
     omega0 : float, rad/s, the frequency the time axis is warped for (the mode's
@@ -150,7 +195,7 @@ def ring_down(model: ReducedModel, bank: JointBank, state: NewmarkState, omega0:
     st.e = 0.0
     resp = [st.q @ outputs.T]
     slips = [model.G @ st.q]
-    total = EnergyBalance()
+    total = EnergyBalance() if isinstance(bank, JointBank) else None   # a bank's only
     iters, done = 0, 0
     if on_chunk is not None:
         on_chunk(np.zeros(1), resp[0][None, :], slips[0][None, :])
@@ -159,7 +204,8 @@ def ring_down(model: ReducedModel, bank: JointBank, state: NewmarkState, omega0:
         run = integ.run(zero, np.zeros(n + 1), st)
         st = run.state
         for name in ("viscous", "joint_dissipation", "kinetic", "strain", "joint_stored"):
-            setattr(total, name, getattr(total, name) + getattr(run.energy, name))
+            if total is not None:
+                setattr(total, name, getattr(total, name) + getattr(run.energy, name))
         iters += run.newton_iterations
         y, s = run.q[1:] @ outputs.T, run.slip[1:]
         resp.append(y)

@@ -51,11 +51,14 @@ def _describe(obj):
     return obj
 
 
-def campaign_hash(model: ReducedModel, bank: JointBank, campaign: Campaign) -> str:
-    """SHA-256 over the reduced model, the joint banks and the campaign definition."""
+def campaign_hash(model: ReducedModel, bank: JointBank | None, campaign: Campaign) -> str:
+    """SHA-256 over the reduced model, the joint banks (None: a protocol that carries
+    its own joints, the exact path of :mod:`runs.response_control`) and the campaign
+    definition."""
     h = hashlib.sha256()
+    joints = () if bank is None else (bank.stiffness, bank.slip_limit)
     for a in (model.basis, model.M, model.K, model.C, model.G, model.K_T,
-              bank.stiffness, bank.slip_limit, campaign.frequency_hz, campaign.force,
+              *joints, campaign.frequency_hz, campaign.force,
               campaign.load, campaign.outputs):
         a = np.ascontiguousarray(a)
         h.update(str(a.shape).encode())

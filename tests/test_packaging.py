@@ -36,7 +36,8 @@ import pytest
 from scipy.integrate import quad
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "cases", "cli", "viz")
+PACKAGES = ("joints", "fe", "runs", "ident", "inverse", "viz", "synthetic", "casefile", "feloop",
+            "cases", "cli")
 # setuptools' message when a folder holding shipped files is not a configured package
 ABSENT = re.compile(r"absent from the .?packages.? configuration|Package would be ignored")
 # what the build does not need: environments, build products, caches, outputs

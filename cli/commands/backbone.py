@@ -22,6 +22,7 @@ from cli import validate
 from cli.model_options import add_model_argument, case_of
 
 from cases.registry import SHIPPED
+from casefile.laws import SLIP_SCALE
 from runs.jsonio import print_json
 
 NAME = "backbone"
@@ -35,11 +36,13 @@ def register(subparsers) -> None:
             "2015): the autonomous model with an artificial damping -xi M q' that balances "
             "the dissipation, continued in the amplitude of the joint that slips most, from "
             "deep micro-slip into macro-slip. Per point: amplitude = largest joint slip / "
-            "phi_max, frequency_hz, zeta = xi/(2 omega) (the mode's damping ratio; M-"
+            "phi_max (a case file of law jenkins: fs/kt; bouc-wen: z_u), frequency_hz, "
+            "zeta = xi/(2 omega) (the mode's damping ratio; M-"
             "proportional, so independent of the shape's scaling), energy = peak kinetic "
-            "energy (J). Paths: exact = continuous Iwan joints through the exact "
-            "describing function, first harmonic; bank = Jenkins banks through AFT with the "
-            "case's harmonics. --json prints the list of points. --compare: EPMC vs "
+            "energy (J). Paths: exact = the joint law (continuous Iwan joints, a Jenkins "
+            "slider, Bouc-Wen) through its exact describing function, first harmonic; bank "
+            "= Jenkins banks through AFT with the case's harmonics (not for bouc-wen). "
+            "--json prints the list of points. --compare (law iwan4): EPMC vs "
             "response-controlled vs force-controlled virtual tests, each fed to the "
             "estimator against the true joint."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -52,8 +55,9 @@ def register(subparsers) -> None:
     parser.add_argument("--path", choices=("exact", "bank"), default="exact",
                         help="joint path of the harmonic balance")
     parser.add_argument("--range", type=float, nargs=2, default=(1e-3, 3.0),
-                        metavar=("LO", "HI"), help="amplitudes (slip / phi_max of the "
-                        "joint that slips most in the linear mode), log-spaced")
+                        metavar=("LO", "HI"), help="amplitudes (slip / phi_max, or the "
+                        "law's slip scale, of the joint that slips most in the linear "
+                        "mode), log-spaced")
     parser.add_argument("--points", type=int, default=50, help="points on the backbone")
     parser.add_argument("--compare", action="store_true",
                         help="the three routes fed to the estimator (cases.backbones)")
@@ -76,7 +80,9 @@ def run(args) -> int:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
     case = case_of(args).nonlinear_model(mode=args.mode)
     if args.compare:
+        case.require_iwan("--compare (the Iwan estimator against the true joint)")
         return _compare(case, args)
+    scale = SLIP_SCALE.get(case.law_name, "phi_max")
     from fe.epmc import epmc_backbone
 
     t0 = time.perf_counter()
@@ -104,17 +110,21 @@ def run(args) -> int:
         plot_backbones([{"label": f"EPMC ({args.path} path)", "style": "-",
                          "amplitude": [p["amplitude"] for p in points],
                          "frequency_hz": bb.frequency_hz, "zeta": bb.zeta}],
-                       xlabel="largest joint slip / phi_max", marks=[(1.0, "phi_max")],
+                       xlabel=f"largest joint slip / {scale}", marks=[(1.0, scale)],
                        title=f"{case.name}, mode {case.mode}", path=args.plot)
     if args.json:
         print_json(points)
         return 0
     print(f"{case.name}, mode {case.mode}: nonlinear mode by EPMC (Krack 2015), {args.path} "
           f"path, {len(points)} points in {elapsed:.2f} s")
-    print(f"  joint: chi = {case.chi:.5f}, R = {case.R:.5g} N/m^(chi+2) (total), phi_max = "
-          f"{case.phi_max:.5g} m; {case.joint_source}")
+    if case.law_name == "iwan4":
+        print(f"  joint: chi = {case.chi:.5f}, R = {case.R:.5g} N/m^(chi+2) (total), phi_max = "
+              f"{case.phi_max:.5g} m; {case.joint_source}")
+    else:
+        print(f"  joint: law {case.law_name} (chi, R: n/a), {scale} = {case.phi_max:.5g} m; "
+              f"{case.joint_source}")
     print(f"  stuck-joint frequency {bb.omega_linear / (2 * math.pi):.4f} Hz; amplitude = "
-          f"largest slip / phi_max; zeta = xi/(2 omega); energy = peak kinetic energy")
+          f"largest slip / {scale}; zeta = xi/(2 omega); energy = peak kinetic energy")
     print("  amplitude  frequency_hz     zeta_%      energy_J   drive_amplitude_m")
     for p in points:
         print(f"  {p['amplitude']:9.4g}  {p['frequency_hz']:12.6f}  {100 * p['zeta']:9.6f}  "

@@ -245,6 +245,9 @@ def run(args) -> int:
     if args.out:
         validate.output_dir(args.out, "--out")   # cli.validate: one output-path rule
     args.file = " ".join(args.files) or None
+    refusing = model_case(args.case)
+    if refusing is not None and "fe_levels" in refusing.refused:
+        refusing.require("fe_levels")     # a law the FE level does not fit: one line, exit 2
     data, truth = load(args.file, args.case, args)
     data.rig_repeatability = rig_from_args(args)
     source = args.file or args.case

@@ -30,9 +30,11 @@ def register(subparsers) -> None:
         description=(
             "Free decay (ring-down) of a case's mode: start on the mode's periodic orbit "
             "(EPMC, the shaker switched off at phase resonance) or from an impulse at the "
-            "drive point, Newmark integration of the reduced model with its Jenkins-bank "
-            "joints (average acceleration, time axis pre-warped for the mode, energy "
-            "balance checked), the record written as a free-decay CSV and identified as a "
+            "drive point, Newmark integration of the reduced model with its joints "
+            "(Jenkins banks; a law without banks, Bouc-Wen, by its own step and exact "
+            "first harmonic) (average acceleration, time axis pre-warped for the mode, "
+            "energy balance checked for banks), the record written as a free-decay CSV "
+            "and identified as a "
             "measured one (band-pass, Hilbert envelope and phase, end effects trimmed); "
             "frequency and damping against the drive-point amplitude compared with the "
             "EPMC backbone and a response-controlled virtual test at the same amplitudes."),
@@ -43,8 +45,8 @@ def register(subparsers) -> None:
     parser.add_argument("--mode", type=int, required=True, help="1-based stuck-joint mode")
     add_model_argument(parser)
     parser.add_argument("--amplitude", type=float, default=0.5,
-                        help="start: largest joint slip / its phi_max (the joint that "
-                             "slips most in the mode)")
+                        help="start: largest joint slip / its phi_max or the law's slip "
+                             "scale (the joint that slips most in the mode)")
     parser.add_argument("--cycles", type=float, default=500.0,
                         help="record length in periods of the mode")
     parser.add_argument("--start", choices=("orbit", "impulse"), default="orbit")
@@ -93,14 +95,17 @@ def report_lines(rep: dict) -> list[str]:
     r, c = rep["record"], rep["comparison"]
     e = r["energy_J"]
     s = r["start"]
-    start = (f"EPMC orbit (bank path) with joint {s['joint']} at slip {s['slip_m']:.4g} m"
-             if s["start"] == "orbit" else
+    start = (f"EPMC orbit ({s.get('path', 'bank')} path) with joint {s['joint']} at slip "
+             f"{s['slip_m']:.4g} m" if s["start"] == "orbit" else
              f"impulse {s['impulse_Ns']:.4g} N s at the drive point")
-    out = [f"{rep['case']}, mode {rep['mode']}: simulated free decay, {start}",
+    out = [f"{rep['case']}, mode {rep['mode']}: simulated free decay, {start}"
+           + (f"; the orbit {s['reached']}" if s.get("reached") else ""),
            f"  {r['samples']} samples, {r['settings']['steps_per_period']} steps per period of "
            f"{r['omega0_rad_s'] / (2 * math.pi):.4f} Hz (time axis pre-warped), "
            f"integration {r['integration_s']:.2f} s" + (" (stored record reused)"
                                                         if r.get("loaded") else ""),
+           "  energy balance: n/a (only Jenkins banks state their stored energy and "
+           "friction work)" if e is None else
            f"  energy balance (J, computed): viscous {e['viscous']:.5g}, joint dissipation "
            f"{e['joint_dissipation']:.5g}, change of kinetic + strain + joint stored "
            f"{e['kinetic_change'] + e['strain_change'] + e['joint_stored_change']:.5g}; "
