@@ -1,13 +1,14 @@
 """The FE model of a case file: strips, supports, interfaces with their joint rows, masses.
 
-Nodes sit at every x the file names (beam and section ends, supports, interfaces, joints,
-masses, drive, sensors), elements in between no longer than ``[mesh] element_size``
-(:func:`fe.mesh.mesh_with_element_size`); a point (joint, mass, drive, sensor) within
-:data:`SNAP_FRACTION` of the element size of another named x shares its node (no sliver
-elements), two range ends that close are refused; every beam takes the nodes of its own
-range, so two stacked beams share their nodes over an interface. Each beam's reference line is its
-``z``; a section with another centroid height is an eccentric element
-(:mod:`fe.stacked`). At an interface at height ``z_i`` (the lower beam's top face):
+Nodes (:mod:`casefile.nodes`) sit at every x the file names (beam and section ends,
+supports, interfaces, joints, masses, drive, sensors), elements in between no longer than
+``[mesh] element_size`` (:func:`fe.mesh.mesh_with_element_size`); a point (joint, mass,
+drive, sensor) within :data:`SNAP_FRACTION` of the element size of another named x shares
+its node (no sliver elements), two range ends that close are refused; every beam takes the
+nodes of its own range, so two stacked beams share their nodes over an interface. Each
+beam's reference line is its ``z``; a section with another centroid height is an
+eccentric element (:mod:`fe.stacked`). At an interface at height ``z_i`` (the lower
+beam's top face):
 
 * ``normal = "tied"``: at every node a spring on ``w_top - w_bot`` of stiffness
   ``b l / (h_bot/(2 E_bot) + h_top/(2 E_top))`` (the two half-thicknesses in series
@@ -41,23 +42,20 @@ act on ``u`` and ``w``. SI units.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
+from casefile.nodes import (  # node placement; its names stay importable from here too
+    NODE_TOLERANCE, SNAP_FRACTION, StripNodes, breakpoints, joint_positions, node_positions,
+    snap_distance)
 from casefile.tables import CaseFileError
 from fe.assembly import coupling_rows
 from fe.beam import THETA, U, W
-from fe.mesh import DofMap, line_mesh, segmented_line_mesh
+from fe.mesh import DofMap, line_mesh
 from fe.stacked import StackedModel, StripMesh, assemble_stack, interface_rows
 
-NODE_TOLERANCE = 1e-9  # m: x values closer than this are one node
-#: named points (joints, masses, drive, sensors) closer than this fraction of the element
-#: size to another named x share its node: an element of 1e-5 m between a bolt mass and a
-#: joint element has a bending stiffness ~1e18 N/m, 1e15 times a 5 mm element's, and the
-#: free-free stiffness matrix's rigid-body modes drown in round-off (a Cholesky failure)
-SNAP_FRACTION = 0.1
 #: a tied contact: this many times the layers' own stiffness at a node (a penalty for "no
 #: slip" and "no relative rotation"; 1e3 keeps K well conditioned, the tied lap then
 #: equals the monolithic beam to the mesh error, tests/test_case_file.py)
@@ -78,13 +76,6 @@ class BuiltCase:
     n_nodes: int
 
 
-def joint_positions(itf) -> np.ndarray:
-    """Joint element positions of an interface (m)."""
-    if itf.joints_at is not None:
-        return np.asarray(itf.joints_at, dtype=float)
-    return np.linspace(itf.x[0], itf.x[1], int(itf.joint_elements))
-
-
 def joint_shares(itf) -> np.ndarray:
     """Each joint element's share of ``kt`` (sums to 1): equal at bolts, trapezoidal for
     distributed elements (module docstring)."""
@@ -93,67 +84,6 @@ def joint_shares(itf) -> np.ndarray:
         return np.full(x.size, 1.0 / x.size)
     w = line_mesh(x).tributary_length()
     return w / w.sum()
-
-
-def _named_x(cf) -> tuple[list, list]:
-    """``(structural, points)``: lists of ``(x, label)`` (m, ``table.i.key``). Structural x
-    (beam, section, support and interface ends) bound element properties and ranges;
-    points (joints, masses, drive, sensors) load one node."""
-    structural, points = [], []
-    for i, b in enumerate(cf.beams):
-        structural += [(v, f"beam.{i}.x") for v in b.x]
-        structural += [(v, f"beam.{i}.section.{j}.x")
-                       for j, s in enumerate(b.sections) for v in s.x]
-    for i, s in enumerate(cf.supports):
-        (structural if s.kind == "clamp" else points).extend((v, f"support.{i}.x") for v in s.x)
-    for i, itf in enumerate(cf.interfaces):
-        structural += [(v, f"interface.{i}.x") for v in itf.x]
-        if itf.tangential == "joint":
-            key = "joints_at" if itf.joints_at is not None else "joint_elements"
-            points += [(v, f"interface.{i}.{key}") for v in joint_positions(itf)]
-    points += [(p.x, f"mass.{i}.x") for i, p in enumerate(cf.masses)]
-    points += [(p.x, f"sensor.{i}.x") for i, p in enumerate(cf.sensors)]
-    points += [(cf.drive.x, "drive.x")] if cf.drive else []
-    return structural, points
-
-
-def snap_distance(element_size: float) -> float:
-    """Named points closer than this (m) share one node (module docstring)."""
-    return SNAP_FRACTION * element_size
-
-
-def breakpoints(cf, element_size: float) -> np.ndarray:
-    """The x that must be nodes (m): every structural x, and every point not within
-    :func:`snap_distance` of one already kept (structural x first, then points in order of
-    x). Two structural x closer than the snap distance (but not equal) are refused."""
-    structural, points = _named_x(cf)
-    snap = snap_distance(element_size)
-    structural.sort()
-    kept = [structural[0]]
-    for x, label in structural[1:]:
-        if x - kept[-1][0] > NODE_TOLERANCE:
-            gap = x - kept[-1][0]
-            if gap < snap:
-                raise CaseFileError(
-                    f"{cf.path}: [{label.rsplit('.', 1)[0]}] x: {x:g} m lies {gap:.3g} m "
-                    f"from {kept[-1][1]} = {kept[-1][0]:g} m; make them equal or at least "
-                    f"{snap:.3g} m ({SNAP_FRACTION:g} element_size) apart")
-            kept.append((x, label))
-    xs = [x for x, _ in kept]
-    for x, _ in sorted(points):
-        if np.min(np.abs(np.asarray(xs) - x)) >= snap:
-            xs.append(x)
-    return np.sort(np.asarray(xs, dtype=float))
-
-
-def node_positions(cf, element_size: float | None = None) -> np.ndarray:
-    """All node positions (m): the breakpoints (:func:`breakpoints`), elements between
-    them no longer than the element size (to 1e-6 relative, so a calibrated length rounded
-    in its last digits does not add an element)."""
-    h = cf.element_size if element_size is None else element_size
-    b = breakpoints(cf, h)
-    counts = np.maximum(1, np.ceil(np.diff(b) / h - 1e-6).astype(int))
-    return segmented_line_mesh(b, counts).x
 
 
 def _strip(cf, beam, x_all: np.ndarray) -> StripMesh:
@@ -167,34 +97,7 @@ def _strip(cf, beam, x_all: np.ndarray) -> StripMesh:
                      rhoA=mat.rho * area, offset=zc - beam.z, thickness=h, width=b)
 
 
-class _Nodes:
-    """Node and DOF lookup of the strips."""
-
-    def __init__(self, strips, snap: float):
-        self.strips, self.snap = {s.name: s for s in strips}, snap
-        self.maps, offset = {}, 0
-        for s in strips:
-            self.maps[s.name] = DofMap(s.n_nodes, 3, offset)
-            offset = self.maps[s.name].stop
-        self.n = offset
-
-    def node(self, beam: str, x: float) -> int:
-        """The node at ``x`` or, for a point snapped to a neighbour, the nearest node."""
-        xs = self.strips[beam].x
-        i = int(np.argmin(np.abs(xs - x)))
-        if abs(xs[i] - x) >= self.snap:
-            raise ValueError(f"no node of beam {beam!r} at x = {x:g} m")
-        return i
-
-    def nodes_in(self, beam: str, x0: float, x1: float) -> np.ndarray:
-        xs = self.strips[beam].x
-        return np.flatnonzero((xs >= x0 - NODE_TOLERANCE) & (xs <= x1 + NODE_TOLERANCE))
-
-    def dof(self, beam: str, x: float, component: int) -> int:
-        return int(self.maps[beam].dof(self.node(beam, x), component))
-
-
-def _interface_springs(cf, itf, nodes: _Nodes):
+def _interface_springs(cf, itf, nodes: StripNodes):
     """Node pairs of an interface and the through-thickness stiffness per node (N/m)."""
     lo_b, up_b = (cf.beam(n) for n in itf.beams)
     n_lo = nodes.nodes_in(lo_b.name, *itf.x)
@@ -212,7 +115,7 @@ def _interface_springs(cf, itf, nodes: _Nodes):
     return n_lo, n_up, k
 
 
-def _tie_stiffness(nodes: _Nodes, lo: str, up: str, n_lo, n_up, key: str) -> np.ndarray:
+def _tie_stiffness(nodes: StripNodes, lo: str, up: str, n_lo, n_up, key: str) -> np.ndarray:
     """Per interface node, ``sum (S_lo + S_up) / l_e`` over its interface elements, ``S``
     the strips' ``EI`` (N m^2: a rotational stiffness, N m/rad) or ``EA`` (N: N/m)."""
     s_lo, s_up = nodes.strips[lo], nodes.strips[up]
@@ -236,11 +139,8 @@ def _check_joint_stiffness(cf, i: int, k_max: float, *strips) -> None:
             f"(stuck joints that stiff act as a bond: tangential = \"tied\")")
 
 
-def build_model(cf) -> BuiltCase:
-    """Assemble the case file's linear model (module docstring)."""
-    x_all = node_positions(cf)
-    strips = [_strip(cf, b, x_all) for b in cf.beams]
-    nodes = _Nodes(strips, snap_distance(cf.element_size))
+def _support_dofs(cf, nodes: StripNodes) -> tuple[np.ndarray, list]:
+    """The supports' fixed DOFs (sorted, unique) and grounded springs ``[(G, k), ...]``."""
     fixed, couplings = [], []
     for s in cf.supports:
         for beam in s.beams:
@@ -255,57 +155,125 @@ def build_model(cf) -> BuiltCase:
                     if k > 0:
                         dof = nodes.dof(beam, s.x[0], comp)
                         couplings.append((coupling_rows([[dof]], [1.0], nodes.n), np.array([k])))
-    fixed = np.unique(np.asarray(fixed, dtype=int))
-    is_free = np.ones(nodes.n, dtype=bool)
-    is_free[fixed] = False
+    return np.unique(np.asarray(fixed, dtype=int)), couplings
 
-    normal_rows, normal_k, joint_rows, joint_k, joint_x, joint_itf, table = (
-        [], [], [], [], [], [], [])
-    for i, itf in enumerate(cf.interfaces):
-        lo_b, up_b = (cf.beam(n) for n in itf.beams)
-        xm = 0.5 * (itf.x[0] + itf.x[1])
-        h_lo, z_lo, _ = lo_b.section_at(xm)
-        z_i = z_lo + 0.5 * h_lo
-        lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
-        m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
-        n_lo, n_up, k = _interface_springs(cf, itf, nodes)
-        if itf.normal == "tied":
-            G = interface_rows(m_up, m_lo, n_up, n_lo, nodes.n)
-            normal_rows.append(G)
-            normal_k.append(k)
-        if itf.tangential == "tied":
-            k_slip = _tie_stiffness(nodes, lo_b.name, up_b.name, n_lo, n_up, "EA")
-            couplings.append((interface_rows(m_up, m_lo, n_up, n_lo, nodes.n, lever_up, lever_lo),
-                              TIED_PENALTY * k_slip))
-        if "tied" in (itf.normal, itf.tangential):
-            # the gap w_top - w_bot is zero along the contact, so is its slope
-            rot = coupling_rows(np.column_stack([m_up.dof(n_up, THETA), m_lo.dof(n_lo, THETA)]),
-                                [1.0, -1.0], nodes.n)
-            k_rot = _tie_stiffness(nodes, lo_b.name, up_b.name, n_lo, n_up, "EI")
-            couplings.append((rot, TIED_PENALTY * k_rot))
-        if itf.tangential == "joint":
-            xj = joint_positions(itf)
-            kj = itf.kt * joint_shares(itf)
-            _check_joint_stiffness(cf, i, float(np.max(kj)), nodes.strips[lo_b.name],
-                                   nodes.strips[up_b.name])
-            jn_lo = [nodes.node(lo_b.name, v) for v in xj]
-            jn_up = [nodes.node(up_b.name, v) for v in xj]
-            xj = nodes.strips[lo_b.name].x[jn_lo]      # a snapped joint sits at its node
-            joint_rows.append(interface_rows(m_up, m_lo, jn_up, jn_lo, nodes.n, lever_up, lever_lo))
-            joint_k.append(kj)
-            joint_x.append(xj)
-            joint_itf.append(np.full(xj.size, i))
-            table += [{"interface": i, "x_m": float(a), "share": float(c / itf.kt),
-                       "k_N_per_m": float(c)} for a, c in zip(xj, kj)]
-    normal = None
-    if normal_rows:
-        G_n = sp.vstack(normal_rows, format="csr")
-        k_n = np.concatenate(normal_k)
+
+@dataclass(frozen=True)
+class _Contact:
+    """An interface's two strips on the mesh: beam names, DOF maps, interface nodes and
+    levers (m) from each beam's reference line to the interface (lower, upper)."""
+    lo: str
+    up: str
+    m_lo: DofMap
+    m_up: DofMap
+    n_lo: np.ndarray
+    n_up: np.ndarray
+    lever_lo: float
+    lever_up: float
+
+    def slip_rows(self, n_dofs: int, n_lo, n_up) -> sp.csr_matrix:
+        """Slip rows ``upper - lower`` (with the levers) at the node pairs."""
+        return interface_rows(self.m_up, self.m_lo, n_up, n_lo, n_dofs, self.lever_up,
+                              self.lever_lo)
+
+
+def _contact(cf, itf, nodes: StripNodes) -> tuple[_Contact, np.ndarray]:
+    """The interface's :class:`_Contact` and its through-thickness stiffness per node (N/m)."""
+    lo_b, up_b = (cf.beam(n) for n in itf.beams)
+    xm = 0.5 * (itf.x[0] + itf.x[1])
+    h_lo, z_lo, _ = lo_b.section_at(xm)
+    z_i = z_lo + 0.5 * h_lo
+    lever_lo, lever_up = z_i - lo_b.z, up_b.z - z_i
+    m_lo, m_up = nodes.maps[lo_b.name], nodes.maps[up_b.name]
+    n_lo, n_up, k = _interface_springs(cf, itf, nodes)
+    return _Contact(lo_b.name, up_b.name, m_lo, m_up, n_lo, n_up, lever_lo, lever_up), k
+
+
+def _ties(itf, c: _Contact, nodes: StripNodes) -> list:
+    """Penalty couplings of a tied interface: on the slip (tangential tied), then on the
+    relative rotation (normal or tangential tied)."""
+    couplings = []
+    if itf.tangential == "tied":
+        k_slip = _tie_stiffness(nodes, c.lo, c.up, c.n_lo, c.n_up, "EA")
+        couplings.append((c.slip_rows(nodes.n, c.n_lo, c.n_up), TIED_PENALTY * k_slip))
+    if "tied" in (itf.normal, itf.tangential):
+        # the gap w_top - w_bot is zero along the contact, so is its slope
+        rot = coupling_rows(np.column_stack([c.m_up.dof(c.n_up, THETA), c.m_lo.dof(c.n_lo, THETA)]),
+                            [1.0, -1.0], nodes.n)
+        k_rot = _tie_stiffness(nodes, c.lo, c.up, c.n_lo, c.n_up, "EI")
+        couplings.append((rot, TIED_PENALTY * k_rot))
+    return couplings
+
+
+def _joint_elements(cf, i: int, c: _Contact,
+                    nodes: StripNodes) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+    """Interface ``i``'s joint elements: slip rows, stiffnesses (N/m), positions (m)."""
+    itf = cf.interfaces[i]
+    xj = joint_positions(itf)
+    kj = itf.kt * joint_shares(itf)
+    _check_joint_stiffness(cf, i, float(np.max(kj)), nodes.strips[c.lo], nodes.strips[c.up])
+    jn_lo = [nodes.node(c.lo, v) for v in xj]
+    jn_up = [nodes.node(c.up, v) for v in xj]
+    xj = nodes.strips[c.lo].x[jn_lo]      # a snapped joint sits at its node
+    return c.slip_rows(nodes.n, jn_lo, jn_up), kj, xj
+
+
+@dataclass
+class _Interfaces:
+    """What the interfaces add to the model, in file order: tie couplings, tied normal
+    contacts, joint elements (rows, stiffnesses, positions, interface index), joint table."""
+    couplings: list = field(default_factory=list)
+    normal_rows: list = field(default_factory=list)
+    normal_k: list = field(default_factory=list)
+    joint_rows: list = field(default_factory=list)
+    joint_k: list = field(default_factory=list)
+    joint_x: list = field(default_factory=list)
+    joint_itf: list = field(default_factory=list)
+    table: list = field(default_factory=list)
+
+    def add_joints(self, i: int, kt: float, rows: sp.csr_matrix, kj: np.ndarray,
+                   xj: np.ndarray) -> None:
+        """Append interface ``i``'s joint elements and their table rows."""
+        self.joint_rows.append(rows)
+        self.joint_k.append(kj)
+        self.joint_x.append(xj)
+        self.joint_itf.append(np.full(xj.size, i))
+        self.table += [{"interface": i, "x_m": float(a), "share": float(c / kt),
+                        "k_N_per_m": float(c)} for a, c in zip(xj, kj)]
+
+    def joint_arrays(self) -> tuple:
+        """(slip rows or None, stiffnesses, positions, interface indices) of all joints."""
+        G_t = sp.vstack(self.joint_rows, format="csr") if self.joint_rows else None
+        return (G_t, np.concatenate(self.joint_k) if self.joint_k else np.zeros(0),
+                np.concatenate(self.joint_x) if self.joint_x else np.zeros(0),
+                np.concatenate(self.joint_itf) if self.joint_itf else np.zeros(0, int))
+
+    def normal_contact(self, is_free: np.ndarray) -> tuple | None:
+        """``(G, k)`` of the tied normal contacts whose rows touch a free DOF (None if none)."""
+        if not self.normal_rows:
+            return None
+        G_n = sp.vstack(self.normal_rows, format="csr")
+        k_n = np.concatenate(self.normal_k)
         touches_free = np.asarray(abs(G_n) @ is_free.astype(float)).ravel() > 0
-        normal = (G_n[np.flatnonzero(touches_free)], k_n[touches_free])
-        couplings.insert(0, normal)
-    G_t = sp.vstack(joint_rows, format="csr") if joint_rows else None
+        return G_n[np.flatnonzero(touches_free)], k_n[touches_free]
 
+
+def _interfaces(cf, nodes: StripNodes) -> _Interfaces:
+    """Ties, tied normal contacts and joint elements of every interface (module docstring)."""
+    parts = _Interfaces()
+    for i, itf in enumerate(cf.interfaces):
+        c, k = _contact(cf, itf, nodes)
+        if itf.normal == "tied":
+            parts.normal_rows.append(interface_rows(c.m_up, c.m_lo, c.n_up, c.n_lo, nodes.n))
+            parts.normal_k.append(k)
+        parts.couplings += _ties(itf, c, nodes)
+        if itf.tangential == "joint":
+            parts.add_joints(i, itf.kt, *_joint_elements(cf, i, c, nodes))
+    return parts
+
+
+def _point_dofs(cf, nodes: StripNodes, is_free: np.ndarray) -> tuple[list, list, int, int]:
+    """Point-mass DOFs and masses (kg), all-DOF indices of the drive and the response."""
     mass_dofs, masses = [], []
     for p in (*cf.masses, *cf.sensors):
         if p.mass > 0:
@@ -315,13 +283,28 @@ def build_model(cf) -> BuiltCase:
     drive_dof = nodes.dof(drive.beam, drive.x, W) if drive else _last_free_w(is_free)
     response = cf.sensors[0] if cf.sensors else drive
     response_dof = nodes.dof(response.beam, response.x, W) if response else drive_dof
+    return mass_dofs, masses, drive_dof, response_dof
+
+
+def build_model(cf) -> BuiltCase:
+    """Assemble the case file's linear model (module docstring)."""
+    x_all = node_positions(cf)
+    strips = [_strip(cf, b, x_all) for b in cf.beams]
+    nodes = StripNodes(strips, snap_distance(cf.element_size))
+    fixed, couplings = _support_dofs(cf, nodes)
+    is_free = np.ones(nodes.n, dtype=bool)
+    is_free[fixed] = False
+    parts = _interfaces(cf, nodes)
+    couplings += parts.couplings
+    normal = parts.normal_contact(is_free)
+    if normal is not None:
+        couplings.insert(0, normal)
+    mass_dofs, masses, drive_dof, response_dof = _point_dofs(cf, nodes, is_free)
     model = assemble_stack(
-        strips, couplings, G_t, np.concatenate(joint_k) if joint_k else np.zeros(0),
-        np.concatenate(joint_x) if joint_x else np.zeros(0),
-        np.concatenate(joint_itf) if joint_itf else np.zeros(0, int), mass_dofs, masses,
-        fixed, drive_dof, response_dof, normal=normal,
-        point_mass=sum(p.mass for p in (*cf.masses, *cf.sensors)))
-    return BuiltCase(model=model, joint_table=table, n_nodes=int(sum(s.n_nodes for s in strips)))
+        strips, couplings, *parts.joint_arrays(), mass_dofs, masses, fixed, drive_dof,
+        response_dof, normal=normal, point_mass=sum(p.mass for p in (*cf.masses, *cf.sensors)))
+    return BuiltCase(model=model, joint_table=parts.table,
+                     n_nodes=int(sum(s.n_nodes for s in strips)))
 
 
 def _last_free_w(is_free: np.ndarray) -> int:
