@@ -48,7 +48,7 @@ def main(argv=None) -> int:
         data, truth = simulate(case, seed)
         f = fit_chi(case, data)
         sd = f.std_error("chi")
-        cf, _ = case.builders["calibrated_file"]()
+        cf, _ = case.require("calibrated_file")()
         cf = dataclasses.replace(cf, interfaces=tuple(
             dataclasses.replace(i, chi=truth["chi"]) if i.tangential == "joint" else i
             for i in cf.interfaces))

@@ -1,22 +1,31 @@
 """One face per case: its model, measured data, nonlinear model and what it can do.
 
-A command asks a :class:`Case` for a capability (:meth:`Case.require`); a case that lacks
-it is a one-line :class:`ident.errors.InputError` naming the case and what it offers, or
-the case's own reason when it refuses the capability (:attr:`Case.refused`: a case file
-whose joint law the FE loop does not fit).
-Cases come from :mod:`cases.registry` (a shipped name or a case file).
+A :class:`Case` is a typed object; each capability (:data:`CAPABILITIES`) is one of its
+methods (``_<capability>`` in a subclass), offered when the case qualifies for it
+(:meth:`Case.offers`). A command asks
+for a capability (:meth:`Case.require`); a case that lacks it is a one-line
+:class:`ident.errors.InputError` naming the case and what it offers, or the case's own
+reason when it refuses the capability (:attr:`Case.refused`: a case file whose joint
+law the FE loop does not fit). The kinds of case: a case file
+(:class:`cases.case_file.CaseFileCase`, built from its TOML alone), the double beam
+(:class:`cases.double_beam.case.DoubleBeamCase`: its case file with the Python model of
+the paper's study beside it) and the lumped 10-DOF model
+(:class:`cases.lumped10.case.LumpedCase`). They come from :mod:`cases.registry` (a
+shipped name or a case file).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Callable
 
 from ident.errors import InputError
+
+__all__ = ["CAPABILITIES", "Case"]
 
 #: capability -> what it means (the wording of the error when a case lacks it)
 CAPABILITIES = {
     "fe_model": "FE strip model (modes, convergence, render, export)",
     "summary": "model summary (case check)",
+    "calibrated_file": "case file with its calibration (modes, case check)",
     "measured_data": "measured data",
     "nonlinear_model": "nonlinear model with every joint parameter given (backbone)",
     "update": "FE model updating against its measured levels (update, loop)",
@@ -28,31 +37,43 @@ CAPABILITIES = {
 }
 
 
-@dataclass
 class Case:
-    """A case: ``name`` (used in outputs), ``source`` (its file or module), and one
-    builder per capability (:data:`CAPABILITIES`)."""
+    """A case: ``name`` (used in outputs), ``description``, ``source`` (its file or
+    module), ``file`` (the checked case file, or None); a subclass defines a method
+    ``_<capability>`` per capability it can have and says in :meth:`offers` which it has."""
 
-    name: str
-    description: str
-    source: str
-    builders: dict = field(default_factory=dict)
-    file: object = None          # the checked case file, when the case is one
-    refused: dict = field(default_factory=dict)   # capability -> why not (one line)
+    def __init__(self, name: str, description: str, source: str, file=None):
+        self.name, self.description, self.source, self.file = name, description, source, file
+
+    def offers(self) -> tuple:
+        """The capabilities this case has (a subclass's)."""
+        return ()
+
+    @property
+    def refused(self) -> dict:
+        """capability -> why this case refuses it (one line)."""
+        return {}
 
     @property
     def capabilities(self) -> tuple:
-        return tuple(c for c in CAPABILITIES if c in self.builders)
+        offered = set(self.offers())
+        return tuple(c for c in CAPABILITIES if c in offered)
+
+    @property
+    def builders(self) -> dict:
+        """capability -> its bound method, for every capability offered."""
+        return {c: getattr(self, f"_{c}") for c in self.capabilities}
 
     def require(self, capability: str) -> Callable:
-        """The builder of ``capability``, or InputError (one line)."""
-        if capability in self.refused:
-            raise InputError(self.refused[capability])
-        if capability not in self.builders:
+        """The method of ``capability``, or InputError (one line)."""
+        why = self.refused.get(capability)
+        if why:
+            raise InputError(why)
+        if capability not in self.capabilities:
             offers = ", ".join(self.capabilities) or "nothing"
             raise InputError(f"case {self.name!r} has no {CAPABILITIES[capability]} "
                              f"(it offers: {offers})")
-        return self.builders[capability]
+        return getattr(self, f"_{capability}")
 
     def fe_model(self, **options):
         """The linear FE model (``options``: e.g. ``element_size``, ``calibrated``)."""
@@ -63,8 +84,9 @@ class Case:
         return self.require("measured_data")()
 
     def nonlinear_model(self, mode: int | None = None):
-        """The jointed model (:class:`cases.nonlinear_case.NonlinearCase`)."""
+        """The jointed model (:class:`casefile.jointed.NonlinearCase`)."""
         return self.require("nonlinear_model")(mode=mode)
 
     def summary(self) -> dict:
+        """The model summary of ``case check``."""
         return self.require("summary")()

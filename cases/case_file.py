@@ -19,7 +19,58 @@ from casefile.schema import read_case_file
 from casefile.summary import case_summary
 
 
-def case_from_file(path, model=None) -> Case:
+class CaseFileCase(Case):
+    """A case file as a case (module docstring); ``cf`` the checked file."""
+
+    def __init__(self, cf):
+        super().__init__(cf.name, cf.description, str(cf.path), cf)
+
+    def offers(self) -> tuple:
+        cf, out = self.file, ["fe_model", "summary", "calibrated_file"]
+        if cf.measured is not None and cf.measured.files:
+            out.append("measured_data")
+        joints = any(i.tangential == "joint" for i in cf.interfaces)
+        if joints and cf.drive is not None and not missing_joint_parameters(cf):
+            out.append("nonlinear_model")
+        if fe_loop.qualifies(cf):
+            out += ["fe_levels", "update", "fe_uncertainty"]
+        return tuple(out)
+
+    @property
+    def refused(self) -> dict:
+        why = fe_loop.refusal(self.file)
+        return {c: why for c in ("update", "fe_levels", "fe_uncertainty")} if why else {}
+
+    def _calibrated_file(self, element_size=None, calibrated=True):
+        """(the file at ``element_size``, calibrated unless told not to; its report)."""
+        f = self.file if element_size is None else dataclasses.replace(
+            self.file, element_size=float(element_size))
+        return calibrate(f) if calibrated else (f, None)
+
+    def _fe_model(self, element_size=None, calibrated=True):
+        return build_model(self._calibrated_file(element_size, calibrated)[0]).model
+
+    def _summary(self):
+        f, report = self._calibrated_file()
+        return case_summary(f, build_model(f), report)
+
+    def _measured_data(self):
+        return self.file.measured.file
+
+    def _nonlinear_model(self, mode=None):
+        return nonlinear_case(self._calibrated_file()[0], self._fe_model(), mode=mode)
+
+    def _fe_levels(self, data, force_scale: float = 1.0):
+        return fe_loop.levels_builder(self.file)(data, force_scale=force_scale)
+
+    def _update(self, **options):
+        return fe_loop.update_builder(self.file)(**options)
+
+    def _fe_uncertainty(self, *args, **options):
+        return fe_loop.uncertainty_builder(self.file)(*args, **options)
+
+
+def case_from_file(path, model=None) -> CaseFileCase:
     """Read and check the case file at ``path`` (CaseFileError on a fault); ``model``: an
     ``updated_model.json`` of ``iwanfe update`` whose fitted joints and structure replace
     the file's (:func:`feloop.updated_model.updated_file`)."""
@@ -28,31 +79,4 @@ def case_from_file(path, model=None) -> Case:
         from feloop.updated_model import updated_file
 
         cf = updated_file(cf, model)
-
-    def file_at(element_size=None, calibrated=True):
-        f = cf if element_size is None else dataclasses.replace(
-            cf, element_size=float(element_size))
-        return calibrate(f) if calibrated else (f, None)
-
-    def fe_model(element_size=None, calibrated=True):
-        return build_model(file_at(element_size, calibrated)[0]).model
-
-    def summary():
-        f, report = file_at()
-        return case_summary(f, build_model(f), report)
-
-    builders = {"fe_model": fe_model, "summary": summary, "calibrated_file": file_at}
-    if cf.measured is not None and cf.measured.files:
-        builders["measured_data"] = lambda: cf.measured.file
-    joints = any(i.tangential == "joint" for i in cf.interfaces)
-    if joints and cf.drive is not None and not missing_joint_parameters(cf):
-        builders["nonlinear_model"] = lambda mode=None: nonlinear_case(
-            file_at()[0], fe_model(), mode=mode)
-    if fe_loop.qualifies(cf):
-        builders["fe_levels"] = fe_loop.levels_builder(cf)
-        builders["update"] = fe_loop.update_builder(cf)
-        builders["fe_uncertainty"] = fe_loop.uncertainty_builder(cf)
-    why = fe_loop.refusal(cf)
-    refused = {c: why for c in ("update", "fe_levels", "fe_uncertainty")} if why else {}
-    return Case(name=cf.name, description=cf.description, source=str(cf.path),
-                builders=builders, file=cf, refused=refused)
+    return CaseFileCase(cf)

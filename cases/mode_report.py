@@ -90,7 +90,7 @@ def mode_report(case, band=None, element_size=None, uncalibrated=False) -> dict:
         raise ValueError(f"--band {lo:g} {hi:g}: HI must be <= {top:.4g} Hz, the shortest "
                          f"bending wave this beam model and mesh represent")
     # --uncalibrated runs no calibration (a failed one raises one line naming [calibrate])
-    file_at = case.builders["calibrated_file"]
+    file_at = case.require("calibrated_file")
     calibration = None if uncalibrated else file_at(element_size=element_size)[1]
     model = case.fe_model(element_size=element_size, calibrated=not uncalibrated)
     return {"case": case.name, "band_hz": [lo, hi], "measured_frequency_hz": measured,

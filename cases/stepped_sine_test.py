@@ -81,7 +81,7 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
     from casefile.nonlinear import file_law, nonlinear_case
 
     rng = np.random.default_rng(seed)
-    cf, _ = case.builders["calibrated_file"]()
+    cf, _ = case.require("calibrated_file")()
     iwan = file_law(cf) == "iwan4"
     chi = float(rng.uniform(*CHI_RANGE)) if iwan else None
     if iwan:

@@ -42,8 +42,8 @@ def _measured(case, modes: list) -> dict | None:
     data = read_measured(path)
     warnings = list(data.warnings)
     declared = None
-    if "calibrated_file" in case.builders:
-        meas = case.builders["calibrated_file"]()[0].measured
+    if "calibrated_file" in case.capabilities:
+        meas = case.require("calibrated_file")()[0].measured
         declared = getattr(meas, "mode", None)
     labels = [int(m) for m in data.modes]
     bending = [m for m in modes if m.get("bending_order")]

@@ -257,11 +257,11 @@ def run(args) -> int:
     case = model_case(args.case)
     if case is not None and "fe_check" in case.capabilities:  # its FE-level check
         level1 = data.for_mode(result["mode"])
-        result["fe_check"] = case.builders["fe_check"](float(level1.omega2[0]))
+        result["fe_check"] = case.require("fe_check")(float(level1.omega2[0]))
     if case is not None and "fe_levels" in case.capabilities:
         # the FE model refitted, base vs extended (issue 13), by the one judge
         from feloop.diagnosis_report import add_fe_diagnosis
-        add_fe_diagnosis(result, data, out=args.out, levels=case.builders["fe_levels"],
+        add_fe_diagnosis(result, data, out=args.out, levels=case.require("fe_levels"),
                          model_key=case.source)
         if case.file is not None:          # the fitted joint against the file's interfaces
             from feloop.case_file import fitted_plausibility
