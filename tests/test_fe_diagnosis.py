@@ -82,6 +82,18 @@ def test_a_hardening_at_the_top_is_named_with_all_levels_and_its_misses_come_fir
 
 
 @pytest.mark.slow
+def test_all_levels_judged_raise_no_alarm_on_a_series_without_a_hidden_mechanism():
+    """The same rule on an independent series with nothing hidden (seed 2: its top level
+    misses the base model's interval, another glue discretization and K_T than the
+    fitted model's): with all levels fitted the FE cause stays ``none``."""
+    from feloop.diagnosis import fe_diagnosis
+
+    r = fe_diagnosis(draw_case(2, "none").data, levels=DoubleBeamLevels.from_data)["fe"]
+    assert r["verdict"]["judged_on"] == "all levels"
+    assert r["cause"] == "none" and r["fit_levels_verdict"]["cause"] == "none"
+
+
+@pytest.mark.slow
 def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
     """An independent series (Jenkins-bank glue of another discretization and K_T,
     multi-harmonic stepped sine, repeatability noise) with nothing hidden: ``none``."""
