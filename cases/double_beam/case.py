@@ -20,7 +20,9 @@ class DoubleBeamCase(CaseFileCase):
     """The double beam (module docstring); ``cf`` its checked case file."""
 
     def offers(self) -> tuple:
-        return (*super().offers(), "fe_check", "uncertainty")
+        # its nonlinear model comes from its study (chi, R~ of its levels), not the file
+        return tuple(dict.fromkeys((*super().offers(), "nonlinear_model", "fe_check",
+                                    "uncertainty")))
 
     def _nonlinear_model(self, mode=None):
         from cases.nonlinear_case import build_nonlinear_case
