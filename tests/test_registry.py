@@ -18,7 +18,14 @@ FE_CASES = [n for n in SHIPPED if "fe_model" in resolve_case(n).capabilities]
 
 def test_every_shipped_case_has_a_face():
     assert set(FE_CASES) >= {"double-beam", "brb"}
-    assert "nonlinear_model" in resolve_case("lumped").capabilities
+    assert resolve_case("lumped").capabilities == ("nonlinear_model",)
+    # the double beam: its case file's capabilities and its study's (the file leaves its
+    # joint parameters to be fitted, the study's nonlinear model takes chi, R~ of its levels)
+    assert set(resolve_case("double-beam").capabilities) == {
+        "fe_model", "summary", "calibrated_file", "measured_data", "nonlinear_model",
+        "update", "fe_levels", "fe_check", "uncertainty", "fe_uncertainty"}
+    with pytest.raises(InputError, match="case 'lumped' has no FE strip model"):
+        resolve_case("lumped").require("fe_model")
 
 
 @pytest.mark.parametrize("name", FE_CASES + ["python:double-beam"])
