@@ -8,7 +8,9 @@ units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
 * :func:`cross_validate`: leave-one-level-out over the interior fit levels (the lowest
   and highest fit level always stay in: they anchor the amplitude range). Each fold
   repeats the candidate's whole fit: from every one of its *original* starts, the best
-  kept (never from the full optimum, which has seen the left-out level); a fold whose fit or
+  kept (never from the full optimum, which has seen the left-out level); all these fits
+  from a cold start, run together (:func:`fit_together`: the simulations they need at
+  one point of their progress in one batch of the simulator); a fold whose fit or
   prediction fails, or whose fit did not converge (:attr:`inverse.update.Fit.converged`:
   its prediction would depend on where the optimizer stopped), is counted as failed, and
   an error over failed folds is ``None`` (``n/a``);
@@ -111,7 +113,7 @@ def _residuals(problem: UpdateProblem, values, warm, masks) -> list:
     out = []
     for k, (v, m) in enumerate(zip(values, masks)):
         before = problem.failures
-        r = problem.residuals(v, m) if outs is None else problem._residual(outs[k], m)
+        r = problem.residuals(v, m) if outs is None else problem.residuals_of(outs[k], m)
         out.append(None if problem.failures > before else r)
     return out
 
@@ -169,6 +171,19 @@ class _Requests:
         return self.job.ask((True, list(values))), None
 
 
+def _once(simulate, values: list, warm: list) -> tuple:
+    """``simulate.batch(values, warm)``, a set asked for again from the same warm starts
+    (the folds' fits from one start begin at one point) simulated once."""
+    key = [(tuple(sorted(v.items())), tuple(sorted((k, id(g)) for k, g in w.items())))
+           for v, w in zip(values, warm)]
+    first: dict = {}
+    index = [first.setdefault(k, len(first)) for k in key]
+    pick = sorted(first.values())
+    outs, after = simulate.batch([values[index.index(i)] for i in pick],
+                                 [warm[index.index(i)] for i in pick])
+    return [outs[i] for i in index], [after[i] for i in index]
+
+
 def fit_together(problem: UpdateProblem, jobs: list) -> tuple:
     """``fit(problem, **job)`` of every job (its keyword arguments), each from a cold
     start (empty warm starts), with the simulations all the fits need at one point of
@@ -189,7 +204,7 @@ def fit_together(problem: UpdateProblem, jobs: list) -> tuple:
         for n in live:
             values += threads[n].request[1]
             owner += [n] * len(threads[n].request[1])
-        outs, after = problem.simulate.batch(values, [warm[n] for n in owner])
+        outs, after = _once(problem.simulate, values, [warm[n] for n in owner])
         at = 0
         for n in live:
             many, vs = threads[n].request

@@ -2,10 +2,14 @@
 
 The simulator is any callable ``simulate(values) -> (omega2, zeta)`` giving the natural
 frequency squared (rad^2/s^2) and damping ratio of one mode at every level of a test
-series (e.g. the nonlinear FE double beam, :mod:`feloop.levels`); the
-parameters are named, bounded scalars (:class:`Parameter`). The fit is weighted least
-squares, i.e. Gaussian maximum likelihood with known noise levels
-(:class:`NoiseModel`)::
+series (e.g. the nonlinear FE double beam, :mod:`feloop.levels`), warm-started from its
+last call or not; optionally with ``simulate.batch(values_list, warm=None) -> (outputs,
+warm_after)``: every set of the list from the warm starts ``warm[i]`` (None: its own,
+which a batch leaves as they are), per set ``(omega2, zeta)`` or the exception of a
+failed simulation, and its warm starts after it (the difference Jacobian's columns in
+one call; :func:`inverse.fe_selection.fit_together`). The parameters are named, bounded
+scalars (:class:`Parameter`). The fit is weighted least squares, i.e. Gaussian maximum
+likelihood with known noise levels (:class:`NoiseModel`)::
 
     chi2(theta) = sum_{v in fit} [((omega2_v(theta) - omega2_v) / s_omega2,v)^2
                                  + ((zeta_v(theta) - zeta_v) / s_zeta,v)^2],        (1)
@@ -137,7 +141,7 @@ class UpdateProblem:
             out = self.simulate(values)
         except SIMULATION_FAILURES as exc:
             out = exc
-        return self._residual(out, mask)
+        return self.residuals_of(out, mask)
 
     def residuals_many(self, values: list, mask=None) -> list:
         """:meth:`residuals` of every parameter set of ``values``: simulated together
@@ -146,9 +150,11 @@ class UpdateProblem:
         batch = getattr(self.simulate, "batch", None)
         if batch is None:
             return [self.residuals(v, mask) for v in values]
-        return [self._residual(out, mask) for out in batch(values)[0]]
+        return [self.residuals_of(out, mask) for out in batch(values)[0]]
 
-    def _residual(self, out, mask) -> np.ndarray:
+    def residuals_of(self, out, mask=None) -> np.ndarray:
+        """:meth:`residuals` of a simulator's output ``out``: ``(omega2, zeta)``, or the
+        exception of a failed simulation."""
         m = self.fit_mask if mask is None else np.asarray(mask, dtype=bool)
         if isinstance(out, BaseException):
             self.failures += 1
@@ -309,9 +315,8 @@ _MAP = "workers" in inspect.signature(least_squares).parameters
 
 
 def _columns(problem: UpdateProblem, funs) -> dict:
-    """The map of the optimizer's difference Jacobian: every column in one ``funs``
-    call (the simulator's batch, each column from the same warm start) when the
-    simulator has a batch and scipy takes a map; else scipy's own loop."""
+    """The map of the optimizer's difference Jacobian: all columns in one ``funs`` call
+    (the simulator's batch) when the simulator has one and scipy takes a map."""
     if _MAP and getattr(problem.simulate, "batch", None) is not None:
         return {"workers": lambda _fun, points: funs(list(points))}
     return {}
