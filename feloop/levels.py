@@ -279,7 +279,7 @@ class FELevels:
         like the model's own, left as they are; None: the model's own): per set its
         LevelPrediction or the exception :meth:`predict` raises, and its warm starts after
         it; on the force route together, each as alone (:func:`fe.hb_response.resonance_batch`)."""
-        warm = [self._warm] * len(ps) if warm is None else list(warm)
+        warm = [self._warm if w is None else w for w in (warm or [None] * len(ps))]
         out, new, todo = [None] * len(ps), list(warm), {}
         for i, p in enumerate(ps):
             try:

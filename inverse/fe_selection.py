@@ -174,7 +174,8 @@ class _Requests:
 def _once(simulate, values: list, warm: list) -> tuple:
     """``simulate.batch(values, warm)``, a set asked for again from the same warm starts
     (the folds' fits from one start begin at one point) simulated once."""
-    key = [(tuple(sorted(v.items())), tuple(sorted((k, id(g)) for k, g in w.items())))
+    key = [(tuple(sorted(v.items())),
+            None if w is None else tuple(sorted((k, id(g)) for k, g in w.items())))
            for v, w in zip(values, warm)]
     first: dict = {}
     index = [first.setdefault(k, len(first)) for k in key]
@@ -184,17 +185,18 @@ def _once(simulate, values: list, warm: list) -> tuple:
     return [outs[i] for i in index], [after[i] for i in index]
 
 
-def fit_together(problem: UpdateProblem, jobs: list) -> tuple:
-    """``fit(problem, **job)`` of every job (its keyword arguments), each from a cold
-    start (empty warm starts), with the simulations all the fits need at one point of
-    their progress solved in one call of the simulator's ``batch(values, warm)``
-    (:mod:`inverse.update`): each fit's results are the ones it has run alone from a
-    cold start. Returns the fits and each fit's warm starts at its end (None for all
-    when the simulator has no batch: then one fit after another)."""
+def fit_together(problem: UpdateProblem, jobs: list, cold: bool = True) -> tuple:
+    """``fit(problem, **job)`` of every job (its keyword arguments), each from a cold start
+    (empty warm starts; ``cold=False``: from the simulator's own), with the simulations
+    all the fits need at one point of their progress solved in one call of the
+    simulator's ``batch(values, warm)`` (:mod:`inverse.update`): each fit's results are
+    the ones it has run alone from that start. Returns the fits and each fit's warm
+    starts at its end (None for all when the simulator has no batch: then one fit after
+    another)."""
     if getattr(problem.simulate, "batch", None) is None:
         return [fit(problem, **job) for job in jobs], [None] * len(jobs)
     threads = [_Job(problem, job) for job in jobs]
-    warm = [{} for _ in jobs]
+    warm = [{} if cold else None for _ in jobs]
     for t in threads:
         t.start()
         t.resume()
