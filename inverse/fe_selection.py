@@ -91,8 +91,8 @@ def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-
                 key=lambda n: (not fits[n].success, fits[n].chi2)) for j in range(len(masks))]
     one = [np.arange(problem.fit_mask.size) == i for i, _ in masks]
     r2, failed, unconverged = [], 0, 0
-    for (m, n), r in zip(zip(one, best), _residuals(problem, [fits[n].values for n in best],
-                                                   [warm[n] for n in best], one)):
+    for n, r in zip(best, _residuals(problem, [fits[n].values for n in best],
+                                     [warm[n] for n in best], one)):
         f = fits[n]
         if not f.converged or r is None:
             failed += 1
@@ -179,9 +179,11 @@ def _once(simulate, values: list, warm: list) -> tuple:
            for v, w in zip(values, warm)]
     first: dict = {}
     index = [first.setdefault(k, len(first)) for k in key]
-    pick = sorted(first.values())
-    outs, after = simulate.batch([values[index.index(i)] for i in pick],
-                                 [warm[index.index(i)] for i in pick])
+    pick = {}                              # unique set -> where it is first asked for
+    for at, i in enumerate(index):
+        pick.setdefault(i, at)
+    outs, after = simulate.batch([values[at] for at in pick.values()],
+                                 [warm[at] for at in pick.values()])
     return [outs[i] for i in index], [after[i] for i in index]
 
 
