@@ -100,8 +100,7 @@ class ResonanceLevels:
     fallbacks: list | None = None
 
 
-#: The Iwan parameters :func:`joints.describing.iwan_describing` reads; each element
-#: kind's coefficient.
+#: The Iwan parameters :func:`joints.describing.iwan_describing` reads; each element's.
 _IWAN = ("chi", "K_T", "R", "S", "phi_max", "a", "beta_ab", "c_in", "q_micro")
 _COEF = {CubicSpring: "k3", QuadraticDamper: "c2"}
 
@@ -133,8 +132,9 @@ class _Balance:
         M, K, C, r = model.M, model.K, model.C, model.n_reduced
         rows = (model.G, load) + tuple(np.atleast_2d(e.rows) for e in elements)
 
-        def off(A):
-            return np.abs(A - np.diag(np.diag(A))).max()
+        def off(A):                      # largest off-diagonal term (0 for a diagonal A)
+            return 0.0 if np.count_nonzero(A) == np.count_nonzero(np.diagonal(A)) else \
+                np.abs(A - np.diag(np.diag(A))).max()
 
         same = like is not None and len(rows) == len(like.source) - 2 and \
             all(a is b for a, b in zip((M, K) + rows[:2], like.source)) and \

@@ -312,15 +312,19 @@ def _joint_results(b: _Balance, k: int, fin, ok, tol) -> dict:
     """Group -> :class:`fe.hb_resonance.ResonanceLevels` of the groups the joint path
     solved (``secant_steps = 0``)."""
     w, Y, N, Dinv, upd, its = fin
-    out = {}
+    rows = np.flatnonzero(ok)
+    if not rows.size:
+        return {}
+    q = Dinv[rows] * (b.F[rows, None] * b.p[None] - N[rows] @ b.X)
+    Dk, A, at, out = b.p[k] * b.F[rows] / q[:, k], np.abs(Y[rows]), 0, {}
     for g, m in enumerate(np.split(np.arange(b.L), b.starts[1:])):
         if ok[m].all():
-            q = Dinv[m] * (b.F[m, None] * b.p[None] - N[m] @ b.X)
-            Dk, A = b.p[k] * b.F[m] / q[:, k], np.abs(Y[m])
+            i = slice(at, at + m.size)
+            at += m.size
             out[g] = ResonanceLevels(
-                omega=w[m], omega2=w[m] ** 2, zeta=Dk.imag / (2.0 * w[m] ** 2),
-                slip=Y[m, :b.nj], slip_amplitude=A[:, :b.nj], element_amplitude=A[:, b.nj:],
-                q=q, secant_steps=0, newton_iterations=int(its[m[0]]),
+                omega=w[m], omega2=w[m] ** 2, zeta=Dk[i].imag / (2.0 * w[m] ** 2),
+                slip=Y[m, :b.nj], slip_amplitude=A[i, :b.nj], element_amplitude=A[i, b.nj:],
+                q=q[i], secant_steps=0, newton_iterations=int(its[m[0]]),
                 element_harmonics=Y[m, b.nj:], fallbacks=[stall_words(u, tol) for u in upd[m]])
     return out
 
@@ -336,10 +340,11 @@ def resonance_batch(problems, mode_index: int, guesses=None, tol: float = 1e-12,
     ``ResonanceLevels`` or the exception it raised (``RuntimeError``, ``ValueError``,
     ``ArithmeticError``)."""
     guesses = [None] * len(problems) if guesses is None else list(guesses)
-    out, bs, k = [None] * len(problems), [], int(mode_index)
+    out, bs, k, seen = [None] * len(problems), [], int(mode_index), {}
     for i, pr in enumerate(problems):
-        try:
-            bs.append((i, _Balance(*pr, like=bs[0][1] if bs else None)))
+        try:                # like: a balance of the same joints, else the first one
+            bs.append((i, _Balance(*pr, like=seen.get(id(pr[1]), bs[0][1] if bs else None))))
+            seen.setdefault(id(pr[1]), bs[-1][1])
         except _FAILURES as exc:
             out[i] = exc
     s = None if not bs else bs[0][1] if len(bs) == 1 else _stack([b for _, b in bs])
