@@ -6,7 +6,8 @@ parameters ``chi``, ``ln_dc1`` = ``|kappa1| B~`` of the joints at level 1 (paper
 30-32, 37), ``zeta_v``, ``f0_hz``, optional ``log10_kt``, ``ln_phimax``; the
 first-harmonic balance with the exact describing function at phase resonance,
 :func:`fe.hb_resonance.resonance_levels`) with the structure taken from a case file
-instead of the double beam's Python model, so the one judge
+instead of the double beam's Python model (reduced by :func:`linear_part`, the
+double beam's too), so the one judge
 (:func:`feloop.select.fe_select`) and ``run_update`` run on it:
 
 * ``K_T`` (``log10_kt``) is the total stuck stiffness of every joint element of every
@@ -26,19 +27,61 @@ SI units.
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from casefile.build import build_model
 from casefile.calibrate import calibrate
-from feloop.levels import FELevels, abscissa_of
+from fe.reduction import JointedSystem, reduced_basis
+from feloop.levels import FELevels, LinearPart, abscissa_of
+from inverse.fe_reference import joint_slip_at_resonance, pick_fe_mode
 
-__all__ = ["total_kt", "CaseLevels"]
+__all__ = ["total_kt", "linear_part", "CaseLevels"]
 
 
 def total_kt(cf) -> float:
     """Total stuck stiffness (N/m) of the joint interfaces of case file ``cf``."""
     return float(sum(i.kt for i in cf.interfaces if i.tangential == "joint"))
+
+
+def linear_part(levels: FELevels, model, K_T: float, lambda3, width: float,
+                grip) -> LinearPart:
+    """The :class:`feloop.levels.LinearPart` of FE-levels model ``levels`` (any case's)
+    from an FE ``model`` with joints (``M``, ``K_without_joints``, ``slip_matrix``,
+    ``joint_stiffness``, ``drive_dof``, ``response_dof``, ``modes``), reduced to its
+    normal and static joint modes; ``lambda3(phi)``: ``int |phi_w|^3 dx`` of the strip
+    the air drag acts on (m kg^-3/2), ``width`` its width (m)."""
+    n = model.M.shape[0]
+    system = JointedSystem(M=model.M, K=model.K_without_joints, C=sp.csr_matrix((n, n)),
+                           G=model.slip_matrix, K_T=model.joint_stiffness)
+    red = reduced_basis(system, min(levels.n_modes, n - 2), static_joint_modes=True)
+    r = red.n_reduced
+    red = replace(red, M=np.eye(r), K=np.diag(red.omega ** 2), C=np.zeros((r, r)))
+    fe_mode = pick_fe_mode(model, levels.omega_1)
+    omega, shapes = model.modes(fe_mode)
+    phi = shapes[:, fe_mode - 1]
+    k = int(np.argmax(np.abs(red.basis.T @ (model.M @ phi))))
+    f = np.zeros(n)
+    f[int(model.drive_dof)] = 1.0
+    gphi = np.asarray(model.slip_matrix @ phi).ravel()
+    if levels.abscissa == "force":
+        slips1 = joint_slip_at_resonance(model.M, model.K, model.slip_matrix,
+                                         f * levels.force_scale * levels.excitation[0],
+                                         float(omega[fe_mode - 1]), levels.zeta_1)
+    else:     # the mode's slips at the level-1 response amplitude (or RMS)
+        slips1 = np.abs(gphi) * levels.response_amplitude[0] \
+            / abs(phi[int(model.response_dof)])
+    kj = np.asarray(model.joint_stiffness, dtype=float)
+    sign = np.sign(red.basis[:, k] @ (model.M @ phi))
+    return LinearPart(K_T=K_T, grip=grip, red=red, k=k, omega_k=float(red.omega[k]),
+                      load=red.load(f), shares=kj / kj.sum(),
+                      gphi=gphi, slips1=slips1,
+                      lambda3=lambda3(phi), phi_drive=float(sign * phi[int(model.drive_dof)]),
+                      width=width, response_row=red.basis[int(model.response_dof)].copy(),
+                      drive_dof=int(model.drive_dof), fe_mode=int(fe_mode))
+
 
 
 def _lambda3(model, phi) -> float:
@@ -87,4 +130,5 @@ class CaseLevels(FELevels):
                      for i in self.cf.interfaces)
         f, _ = calibrate(dataclasses.replace(self.cf, interfaces=itfs))
         model = build_model(f).model
-        return self.reduce(model, K_T, lambda phi: _lambda3(model, phi), width=1.0, grip=None)
+        return linear_part(self, model, K_T, lambda phi: _lambda3(model, phi), width=1.0,
+                           grip=None)

@@ -1,50 +1,48 @@
 """Any jointed FE model as a function of its parameters: omega^2 and zeta at every level.
 
-:class:`FELevels` maps a parameter set (a dict, :data:`BASE_PARAMETERS` and the
-extensions of :mod:`feloop.causes`) to the natural frequency and damping ratio of
-the measured mode at every force level of a measured series, by the nonlinear FE
-simulation: the case's reduced FE model (:func:`fe.reduction.reduced_basis` with static
-joint modes) with one continuous four-parameter Iwan element per joint element, driven
-at each level's force, solved by first-harmonic balance with the exact describing
-function at the phase resonance of the mode's modal filter
-(:func:`fe.hb_resonance.resonance_levels`). One campaign of 10 levels takes about 15 ms.
-A case supplies only :meth:`FELevels._build` (its FE model at a joint stiffness K_T,
-calibrated as the case calibrates), e.g. :class:`feloop.case_levels.CaseLevels`.
+:class:`FELevels` maps a parameter set (a dict, :data:`BASE_PARAMETERS` and the extensions
+of :mod:`feloop.causes`) to the natural frequency and damping ratio of the measured mode at
+every force level of a measured series, by the nonlinear FE simulation: the case's reduced
+FE model (:func:`fe.reduction.reduced_basis` with static joint modes) with one continuous
+four-parameter Iwan element per joint element, driven at each level's force, solved by
+first-harmonic balance with the exact describing function at the phase resonance of the
+mode's modal filter (:func:`fe.hb_resonance.resonance_levels`; many parameter sets at once,
+warm-started, :func:`fe.hb_response.resonance_batch`). One campaign of 10 levels takes a
+few ms. A case supplies only :meth:`FELevels._build` (its FE model at a joint stiffness
+K_T, calibrated as the case calibrates), e.g. :class:`feloop.case_levels.CaseLevels`.
 
 Parameters (SI units; how each enters):
 
 * ``chi``: the Iwan exponent, the same at every joint element.
 * ``ln_dc1``: ln of the joints' modal quadrature stiffness at level 1, ``|kappa1| B~``
-  (rad^2/s^2, paper eq. 30-32, 37): the joint strength in the variable the data
-  determine. ``R~ = exp(ln_dc1) / ((|kappa1|/R) B~(chi))`` (:func:`inverse.iwan_modal.
-  r_tilde`), ``B~`` from the linear-inverse joint slips at level 1 (force
-  ``force_scale * excitation_1`` at resonance with the measured ``zeta_1``,
+  (rad^2/s^2, paper eq. 30-32, 37): the joint strength in the variable the data determine.
+  ``R~ = exp(ln_dc1) / ((|kappa1|/R) B~(chi))`` (:func:`inverse.iwan_modal.r_tilde`),
+  ``B~`` from the linear-inverse joint slips at level 1 (force ``force_scale *
+  excitation_1`` at resonance with the measured ``zeta_1``,
   :func:`inverse.fe_reference.joint_slip_at_resonance`). Node ``m`` carries the share
   ``w_m = k_m / K_T`` of R~ and of S, hence one ``phi_max`` for all (eq. 1 below).
-* ``zeta_v``: viscous modal damping ratio of every basis vector (at its frequency after
-  the ``f0_hz`` scaling below).
-* ``f0_hz``: the stuck-joint natural frequency of the mode (Hz). The case calibrates
-  its model for each K_T (:meth:`FELevels._build`); ``f0_hz`` then scales the whole
-  stiffness (strips and joints) by ``(2 pi f0)^2 / omega_k^2``, which moves the
-  frequency and no mode shape.
-* ``log10_kt``: the total stuck joint stiffness K_T (N/m). Each value builds and
-  calibrates its own model (cached).
+* ``zeta_v``: viscous modal damping ratio of every basis vector (at its frequency after the
+  ``f0_hz`` scaling below).
+* ``f0_hz``: the stuck-joint natural frequency of the mode (Hz). The case calibrates its
+  model for each K_T (:meth:`FELevels._build`); ``f0_hz`` then scales the whole stiffness
+  (strips and joints) by ``(2 pi f0)^2 / omega_k^2``: the frequency moves, no mode shape.
+* ``log10_kt``: the total stuck joint stiffness K_T (N/m); each value builds and calibrates
+  its own model (cached).
 * ``ln_phimax`` (optional): ``ln(phi_max / a_ref)``, ``a_ref`` the largest level-1
   linear-inverse joint slip: where macro-slip starts, in units of the slip. Absent, or
   above the largest ``phi_max`` the stuck stiffness allows (``beta = 0``, eq. 1 of
-  :func:`phi_max_of`): ``beta = 0``; below it, ``1 + beta = (phi_max(beta=0) / phi_max)^(chi+1)``
-  (the Dirac share of the Iwan density). In this variable the onset level barely moves
-  when chi or the joint strength change, which keeps the fits smooth.
+  :func:`phi_max_of`): ``beta = 0``; below it, ``1 + beta = (phi_max(beta=0) /
+  phi_max)^(chi+1)`` (the Dirac share of the Iwan density). In this variable the onset
+  level barely moves when chi or the joint strength change: the fits stay smooth.
 
-The force is ``force_scale * excitation`` (N/V, an assumption: every omega^2 and zeta
-is invariant to it, R~ scales as ``force_scale^-(chi+1)``).
-
-Rows whose abscissa is the response amplitude (free decay, response control) are
-simulated at that amplitude instead (``abscissa = response``: phase resonance with the
-force found, :func:`fe.hb_response.response_levels`, the EPMC backbone read there), and
-random rows by the Rayleigh expectation over their response RMS (``abscissa =
-random``, :func:`rayleigh_expectation`); ``ln_dc1`` then refers to the joint slips of the
-mode at level 1's response amplitude (or RMS).
+The force is ``force_scale * excitation`` (N/V, an assumption: every omega^2 and zeta is
+invariant to it, R~ scales as ``force_scale^-(chi+1)``). Rows whose abscissa is the
+response amplitude (free decay, response control) are simulated at that amplitude
+(``abscissa = response``: phase resonance with the force found,
+:func:`fe.hb_response.response_levels`, the EPMC backbone read there), random rows by the
+Rayleigh expectation over their response RMS (``abscissa = random``,
+:func:`rayleigh_expectation`); ``ln_dc1`` then refers to the joint slips of the mode at
+level 1's response amplitude (or RMS).
 """
 from __future__ import annotations
 
@@ -52,13 +50,10 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.sparse as sp
 
-from fe.hb_resonance import resonance_levels
-from fe.hb_response import response_levels
-from fe.reduction import JointedSystem, reduced_basis
-from inverse.fe_reference import joint_slip_at_resonance, pick_fe_mode
+from fe.hb_response import resonance_batch, response_levels
 from inverse.iwan_modal import r_tilde
+from inverse.update import SIMULATION_FAILURES
 from inverse.random_amplitude import rayleigh_nodes
 from joints.iwan import IwanParameters
 
@@ -94,15 +89,13 @@ def phi_max_of(K_T, R, chi, beta) -> float:
 
 @dataclass
 class LinearPart:
-    """One calibrated linear jointed model (one K_T) in reduced modal form.
-
-    ``red`` (undamped Ritz basis), ``k`` (basis vector of the measured mode),
-    ``omega_k`` (its stuck-joint frequency, rad/s), ``load`` (reduced unit drive),
-    ``grip`` (m), ``shares`` (w_m), ``gphi`` (joint slips of the mass-normalized mode),
-    ``slips1`` (linear-inverse slips at level 1, m), ``lambda3`` (``int |phi_w|^3 dx``,
-    kg^-3/2 m), ``phi_drive`` (the mode at the drive DOF), ``response_row`` (the basis
-    at the response DOF: ``x_resp = response_row . q``), ``drive_dof`` (physical),
-    ``fe_mode`` (1-based mode of the full model)."""
+    """One calibrated linear jointed model (one K_T) in reduced modal form: ``red``
+    (undamped Ritz basis), ``k`` (basis vector of the measured mode), ``omega_k`` (its
+    stuck-joint frequency, rad/s), ``load`` (reduced unit drive), ``grip`` (m), ``shares``
+    (w_m), ``gphi`` (joint slips of the mass-normalized mode), ``slips1`` (linear-inverse
+    slips at level 1, m), ``lambda3`` (``int |phi_w|^3 dx``, kg^-3/2 m), ``phi_drive``
+    (the mode at the drive DOF), ``response_row`` (the basis at the response DOF: ``x_resp
+    = response_row . q``), ``drive_dof`` (physical), ``fe_mode`` (1-based, full model)."""
 
     K_T: float
     grip: float
@@ -132,10 +125,9 @@ class LinearPart:
 
 @dataclass
 class LevelPrediction:
-    """Per level: ``omega2`` (rad^2/s^2), ``zeta``, ``frequency_hz``, largest joint slip
-    over ``phi_max`` (``slip_over_phi_max``), the joint (``R``, ``phi_max``, ``F_S``,
-    ``K_T``) the parameters made, the modal amplitude ``|q_k|`` (kg^1/2 m) and
-    ``fallbacks`` (:attr:`fe.hb_resonance.ResonanceLevels.fallbacks`)."""
+    """Per level: ``omega2`` (rad^2/s^2), ``zeta``, ``frequency_hz``, largest joint slip over
+    ``phi_max`` (``slip_over_phi_max``), the joint (``R``, ``phi_max``, ``F_S``, ``K_T``)
+    the parameters made, the modal amplitude ``|q_k|`` (kg^1/2 m) and ``fallbacks``."""
 
     omega2: np.ndarray
     zeta: np.ndarray
@@ -156,25 +148,17 @@ class LevelPrediction:
 
 
 class FELevels:
-    """The measured series' levels simulated by a case's FE model (module docstring);
-    a case subclasses it with its :meth:`_build` and :attr:`default_kt`.
-
-    Parameters
-    ----------
-    excitation : (L,) excitation of each level (V or N); ``force = force_scale *
-        excitation`` (N).
-    run_order : (L,) int
-    omega2_1, zeta_1 : measured omega^2 (rad^2/s^2) and zeta of the lowest level (the
-        reference of ``ln_dc1``, module docstring).
-    force_scale : float, N per excitation unit.
-    abscissa : ``force`` (each level at its force), ``response`` (each level at its
-        response amplitude: response control, free decay) or ``random`` (the Rayleigh
-        expectation at each level's response RMS); see :data:`ABSCISSAE`.
-    response_amplitude : (L,) the held response amplitude (``response``) or response
-        RMS (``random``) at the case's response point, in any unit proportional to
-        displacement (omega^2 and zeta are invariant to it; the air-drag and cubic
-        causes read it as metres).
-    """
+    """The measured series' levels simulated by a case's FE model (module docstring); a
+    case subclasses it with its :meth:`_build` and :attr:`default_kt`. ``excitation``
+    (L,): of each level (V or N; ``force = force_scale * excitation``, N); ``run_order``
+    (L,); ``omega2_1``, ``zeta_1``: measured omega^2 (rad^2/s^2) and zeta of the lowest
+    level (the reference of ``ln_dc1``); ``force_scale``: N per excitation unit;
+    ``abscissa``: ``force`` (each level at its force), ``response`` (at its response
+    amplitude: response control, free decay) or ``random`` (the Rayleigh expectation at
+    its response RMS), :data:`ABSCISSAE`; ``response_amplitude`` (L,): the held response
+    amplitude or RMS at the case's response point, in any unit proportional to
+    displacement (omega^2 and zeta are invariant to it; air drag and cubic causes read
+    it as metres)."""
 
     #: K_T (N/m) when a parameter set has no ``log10_kt`` (assumed; set by the case)
     default_kt: float = math.nan
@@ -201,6 +185,7 @@ class FELevels:
         self.n_modes = int(n_modes)
         self._linear: dict = {}
         self._warm: dict = {}
+        self._joints: dict = {}
 
     def reset(self) -> None:
         """Forget the warm starts (results then depend on no earlier call)."""
@@ -227,51 +212,26 @@ class FELevels:
 
     def _build(self, K_T: float) -> LinearPart:
         """The case's calibrated model at joint stiffness ``K_T`` (N/m), reduced by
-        :meth:`reduce`."""
+        :func:`feloop.case_levels.linear_part`."""
         raise NotImplementedError
 
     def structure(self, lin: LinearPart) -> str:
         """How the structure of ``lin`` was calibrated, in reports."""
         return "structure as the case file gives or calibrates it"
 
-    def reduce(self, model, K_T: float, lambda3, width: float, grip: float) -> LinearPart:
-        """The :class:`LinearPart` of an FE ``model`` with joints (``M``,
-        ``K_without_joints``, ``slip_matrix``, ``joint_stiffness``, ``drive_dof``,
-        ``response_dof``, ``modes``); ``lambda3(phi)``: ``int |phi_w|^3 dx`` of the
-        strip the air drag acts on (m kg^-3/2), ``width`` its width (m)."""
-        n = model.M.shape[0]
-        system = JointedSystem(M=model.M, K=model.K_without_joints, C=sp.csr_matrix((n, n)),
-                               G=model.slip_matrix, K_T=model.joint_stiffness)
-        red = reduced_basis(system, min(self.n_modes, n - 2), static_joint_modes=True)
-        r = red.n_reduced
-        red = replace(red, M=np.eye(r), K=np.diag(red.omega ** 2), C=np.zeros((r, r)))
-        fe_mode = pick_fe_mode(model, self.omega_1)
-        omega, shapes = model.modes(fe_mode)
-        phi = shapes[:, fe_mode - 1]
-        k = int(np.argmax(np.abs(red.basis.T @ (model.M @ phi))))
-        f = np.zeros(n)
-        f[int(model.drive_dof)] = 1.0
-        gphi = np.asarray(model.slip_matrix @ phi).ravel()
-        if self.abscissa == "force":
-            slips1 = joint_slip_at_resonance(model.M, model.K, model.slip_matrix,
-                                             f * self.force_scale * self.excitation[0],
-                                             float(omega[fe_mode - 1]), self.zeta_1)
-        else:     # the mode's slips at the level-1 response amplitude (or RMS)
-            slips1 = np.abs(gphi) * self.response_amplitude[0] \
-                / abs(phi[int(model.response_dof)])
-        kj = np.asarray(model.joint_stiffness, dtype=float)
-        sign = np.sign(red.basis[:, k] @ (model.M @ phi))
-        return LinearPart(K_T=K_T, grip=grip, red=red, k=k, omega_k=float(red.omega[k]),
-                          load=red.load(f), shares=kj / kj.sum(),
-                          gphi=gphi, slips1=slips1,
-                          lambda3=lambda3(phi), phi_drive=float(sign * phi[int(model.drive_dof)]),
-                          width=width, response_row=red.basis[int(model.response_dof)].copy(),
-                          drive_dof=int(model.drive_dof), fe_mode=int(fe_mode))
-
     def joint(self, p: dict) -> dict:
-        """The joints of parameter set ``p``: ``chi, R, K_T, beta, phi_max, F_S``
-        and the per-node :class:`joints.iwan.IwanParameters` (``params``)."""
+        """The joints of parameter set ``p``: ``chi, R, K_T, beta, phi_max, F_S`` and the
+        per-node :class:`joints.iwan.IwanParameters` (``params``, the same objects for the
+        same joint parameters: the last 256 kept)."""
         lin = self.linear(10.0 ** float(p.get("log10_kt", math.log10(self.default_kt))))
+        key = (round(math.log10(lin.K_T), 9), float(p["chi"]), float(p["ln_dc1"]),
+               float(p["ln_phimax"]) if "ln_phimax" in p else "absent")
+        if key not in self._joints:
+            self._joints = self._joints if len(self._joints) < 256 else {}
+            self._joints[key] = self._joint(p, lin)
+        return dict(self._joints[key])
+
+    def _joint(self, p: dict, lin: LinearPart) -> dict:
         K_T = lin.K_T                   # the model's own (log10 K_T rounded to 1e-9)
         chi = float(p["chi"])
         if not -1.0 < chi < 0.0:
@@ -306,29 +266,64 @@ class FELevels:
         return j, red, scale, forces, elements
 
     def predict(self, p: dict, extension=None) -> LevelPrediction:
-        """omega^2 and zeta at every level for parameter set ``p`` (module docstring);
-        ``extension``: a :class:`feloop.causes.Extension` (its
-        parameters in ``p``) or None."""
-        j, red, scale, forces, elements = self.setup(p, extension)
-        lin = j["linear"]
-        key = (round(math.log10(j["K_T"]), 9), getattr(extension, "cause", None))
-        warm = self._warm.get(key)
-        if self.abscissa == "force":
-            res = resonance_levels(red, j["params"], lin.load, forces, lin.k, scale=scale,
-                                   elements=elements, guess=warm)
-        else:
-            amp, n = self.response_amplitude, 1
-            if self.abscissa == "random":      # each level at the Rayleigh nodes
-                factor, weight = rayleigh_nodes(RAYLEIGH_NODES, RAYLEIGH_MIN_WEIGHT)
-                n = factor.size
-                amp, scale = np.outer(amp, factor).ravel(), np.repeat(scale, n)
-            res = response_levels(red, j["params"], lin.load, amp, lin.response_row, lin.k,
-                                  scale=scale, elements=elements, guess=warm)
-        self._warm[key] = res
-        omega2, zeta = res.omega2, res.zeta
+        """omega^2 and zeta at every level for parameter set ``p`` (module docstring),
+        from the last solution of the same K_T and ``extension`` (a
+        :class:`feloop.causes.Extension`, its parameters in ``p``, or None)."""
+        (pred,), (self._warm,) = self.predict_batch([p], extension)
+        if isinstance(pred, Exception):
+            raise pred
+        return pred
+
+    def predict_batch(self, ps, extension=None, warm=None) -> tuple:
+        """:meth:`predict` of every set of ``ps`` from its warm starts ``warm[i]`` (dicts
+        like the model's own, left as they are; None: the model's own): per set its
+        LevelPrediction or the exception :meth:`predict` raises, and its warm starts after
+        it; on the force route together, each as alone (:func:`fe.hb_response.resonance_batch`)."""
+        warm = [self._warm if w is None else w for w in (warm or [None] * len(ps))]
+        out, new, todo = [None] * len(ps), list(warm), {}
+        for i, p in enumerate(ps):
+            try:
+                s = self.setup(p, extension)
+                todo.setdefault((round(math.log10(s[0]["K_T"]), 9),
+                                 getattr(extension, "cause", None)), []).append((i, s))
+            except SIMULATION_FAILURES as exc:
+                out[i] = exc
+        for key, items in todo.items():
+            guesses = [warm[i].get(key) for i, _ in items]
+            if self.abscissa == "force":
+                res = resonance_batch([(red, j["params"], j["linear"].load, f, a, el) for
+                                       _, (j, red, a, f, el) in items], items[0][1][0]["linear"].k,
+                                      guesses)
+            else:
+                res = [self._response(s, g) for (_, s), g in zip(items, guesses)]
+            for (i, s), r in zip(items, res):
+                failed = isinstance(r, Exception)
+                out[i] = r if failed else self._prediction(ps[i], s[0], r)
+                new[i] = warm[i] if failed else {**warm[i], key: r}
+        return out, new
+
+    def _response(self, s, guess):
+        """The response or random route of set-up parameters ``s`` from ``guess``: the
+        solution, or the exception it raised."""
+        j, red, scale, forces, el = s
+        lin, amp = j["linear"], self.response_amplitude
+        if self.abscissa == "random":      # each level at the Rayleigh nodes
+            factor = rayleigh_nodes(RAYLEIGH_NODES, RAYLEIGH_MIN_WEIGHT)[0]
+            amp, scale = np.outer(amp, factor).ravel(), np.repeat(scale, factor.size)
+        try:
+            return response_levels(red, j["params"], lin.load, amp, lin.response_row, lin.k,
+                                   scale=scale, elements=el, guess=guess)
+        except SIMULATION_FAILURES as exc:
+            return exc
+
+    def _prediction(self, p: dict, j: dict, res) -> LevelPrediction:
+        """The LevelPrediction of parameter set ``p`` (joints ``j``) from its solution."""
+        lin, omega2, zeta = j["linear"], res.omega2, res.zeta
         slip, modal = res.slip_amplitude.max(axis=1), np.abs(res.q[:, lin.k])
         fallbacks = list(res.fallbacks)
         if self.abscissa == "random":
+            weight = rayleigh_nodes(RAYLEIGH_NODES, RAYLEIGH_MIN_WEIGHT)[1]
+            n = weight.size
             omega2, zeta = rayleigh_expectation(omega2.reshape(-1, n), zeta.reshape(-1, n),
                                                 weight)
             slip, modal = slip.reshape(-1, n).max(axis=1), modal.reshape(-1, n) @ weight
@@ -381,14 +376,19 @@ class Simulator:
         pred = self.fe.predict(values, self.extension)
         return pred.omega2, pred.zeta
 
+    def batch(self, values: list, warm=None) -> tuple:
+        """The batch of :mod:`inverse.update` (:meth:`FELevels.predict_batch`): per set
+        ``(omega2, zeta)`` or the exception, and its warm starts after it."""
+        preds, after = self.fe.predict_batch(values, self.extension, warm)
+        return [p if isinstance(p, Exception) else (p.omega2, p.zeta) for p in preds], after
+
     def reset(self) -> None:
         self.fe.reset()
 
 
 def level_entries(data, mask, models: dict) -> list:
-    """One dict per level of ``data``: ``level``, ``held_out`` (not in ``mask``),
-    ``measured`` and each of ``models`` (name -> LevelPrediction), each as
-    ``{frequency_hz, zeta}``."""
+    """One dict per level of ``data``: ``level``, ``held_out`` (not in ``mask``), ``measured``
+    and each of ``models`` (name -> LevelPrediction), each as ``{frequency_hz, zeta}``."""
     f_meas = np.sqrt(data.omega2) / (2 * math.pi)
     rows = []
     for i, lv in enumerate(data.level):

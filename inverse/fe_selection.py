@@ -8,7 +8,9 @@ units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
 * :func:`cross_validate`: leave-one-level-out over the interior fit levels (the lowest
   and highest fit level always stay in: they anchor the amplitude range). Each fold
   repeats the candidate's whole fit: from every one of its *original* starts, the best
-  kept (never from the full optimum, which has seen the left-out level); a fold whose fit or
+  kept (never from the full optimum, which has seen the left-out level); all these fits
+  from a cold start, run together (:func:`fit_together`: the simulations they need at
+  one point of their progress in one batch of the simulator); a fold whose fit or
   prediction fails, or whose fit did not converge (:attr:`inverse.update.Fit.converged`:
   its prediction would depend on where the optimizer stopped), is counted as failed, and
   an error over failed folds is ``None`` (``n/a``);
@@ -23,15 +25,16 @@ standard deviations (delta method) with parameters at a bound held there.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import threading
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from inverse.judge import W_AMBIGUOUS, Candidate, fit_test, select
 from inverse.update import Fit, UpdateProblem, fit
 
-__all__ = ["FitCandidate", "held_out_errors", "cross_validate", "judge_extensions",
-           "prediction_sd", "fit_test_of"]
+__all__ = ["FitCandidate", "held_out_errors", "cross_validate", "fit_together",
+           "judge_extensions", "prediction_sd", "fit_test_of"]
 
 
 @dataclass
@@ -72,20 +75,26 @@ def held_out_errors(problem: UpdateProblem, values: dict) -> float | None:
 def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-8) -> tuple:
     """Leave-one-level-out rms error over the interior fit levels (module docstring),
     each fold refitted from every start of ``starts`` (optimizer tolerance ``tol``), the
-    best kept. Returns ``(error or None, failed folds, of them those whose fit did not
+    best kept; every fit from a cold start, all of them together (:func:`fit_together`).
+    Returns ``(error or None, failed folds, of them those whose fit did not
     converge)``."""
     idx = np.flatnonzero(problem.fit_mask)
-    r2, failed, unconverged = [], 0, 0
+    starts = list(starts or [{}])
+    masks = []
     for i in idx[1:-1]:
         m = problem.fit_mask.copy()
         m[i] = False
-        f = min((fit(problem, result.free, start=s, mask=m, tol=tol) for s in starts or [{}]),
-                key=lambda f: (not f.success, f.chi2))
-        one = np.zeros_like(m)
-        one[i] = True
-        before = problem.failures
-        r = problem.residuals(f.values, one)
-        if not f.converged or problem.failures > before:
+        masks.append((i, m))
+    fits, warm = fit_together(problem, [dict(free=result.free, start=s, mask=m, tol=tol)
+                                        for _, m in masks for s in starts])
+    best = [min(range(j * len(starts), (j + 1) * len(starts)),
+                key=lambda n: (not fits[n].success, fits[n].chi2)) for j in range(len(masks))]
+    one = [np.arange(problem.fit_mask.size) == i for i, _ in masks]
+    r2, failed, unconverged = [], 0, 0
+    for n, r in zip(best, _residuals(problem, [fits[n].values for n in best],
+                                     [warm[n] for n in best], one)):
+        f = fits[n]
+        if not f.converged or r is None:
             failed += 1
             unconverged += f.feasible and not f.converged
             continue
@@ -93,6 +102,126 @@ def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-
     if failed or not r2:
         return None, failed, unconverged
     return float(np.sqrt(np.mean(r2))), failed, unconverged
+
+
+def _residuals(problem: UpdateProblem, values, warm, masks) -> list:
+    """The residuals of every parameter set on its mask, each simulated from its warm
+    starts (together, by the simulator's batch, where it has one); None where the
+    simulation failed (counted in ``problem.failures``)."""
+    batch = getattr(problem.simulate, "batch", None)
+    outs = batch(values, warm)[0] if batch is not None and None not in warm else None
+    out = []
+    for k, (v, m) in enumerate(zip(values, masks)):
+        before = problem.failures
+        r = problem.residuals(v, m) if outs is None else problem.residuals_of(outs[k], m)
+        out.append(None if problem.failures > before else r)
+    return out
+
+
+class _Job(threading.Thread):
+    """One fit of :func:`fit_together` in a thread of its own, whose simulations are
+    requests to the coordinator (the caller's thread); only one of the two runs at a
+    time, so the fits run one after another between batches."""
+
+    def __init__(self, problem: UpdateProblem, kwargs: dict):
+        super().__init__(daemon=True)
+        self.kwargs, self.request, self.reply = kwargs, None, None
+        self.result = self.error = None
+        self.done = False
+        self._go, self._back = threading.Semaphore(0), threading.Semaphore(0)
+        self.problem = replace(problem, simulate=_Requests(self), failures=0)
+
+    def run(self) -> None:
+        self._go.acquire()
+        try:
+            self.result = fit(self.problem, **self.kwargs)
+        except BaseException as exc:       # handed to the coordinator, raised there
+            self.error = exc
+        self.done = True
+        self._back.release()
+
+    def ask(self, request):
+        """In the job's thread: hand ``request`` over and wait for the reply."""
+        self.request = request
+        self._back.release()
+        self._go.acquire()
+        return self.reply
+
+    def resume(self, reply=None) -> None:
+        """In the coordinator's thread: reply and wait for the next request."""
+        self.reply = reply
+        self._go.release()
+        self._back.acquire()
+
+
+@dataclass
+class _Requests:
+    """The simulator of a job's problem: a call (one set, from the job's warm starts,
+    which it then advances) or a batch (sets from them, leaving them) is a request."""
+
+    job: _Job
+
+    def __call__(self, values: dict):
+        out = self.job.ask((False, [values]))[0]
+        if isinstance(out, BaseException):
+            raise out
+        return out
+
+    def batch(self, values: list, warm=None) -> tuple:
+        return self.job.ask((True, list(values))), None
+
+
+def _once(simulate, values: list, warm: list) -> tuple:
+    """``simulate.batch(values, warm)``, a set asked for again from the same warm starts
+    (the folds' fits from one start begin at one point) simulated once."""
+    key = [(tuple(sorted(v.items())),
+            None if w is None else tuple(sorted((k, id(g)) for k, g in w.items())))
+           for v, w in zip(values, warm)]
+    first: dict = {}
+    index = [first.setdefault(k, len(first)) for k in key]
+    pick = {}                              # unique set -> where it is first asked for
+    for at, i in enumerate(index):
+        pick.setdefault(i, at)
+    outs, after = simulate.batch([values[at] for at in pick.values()],
+                                 [warm[at] for at in pick.values()])
+    return [outs[i] for i in index], [after[i] for i in index]
+
+
+def fit_together(problem: UpdateProblem, jobs: list, cold: bool = True) -> tuple:
+    """``fit(problem, **job)`` of every job (its keyword arguments), each from a cold start
+    (empty warm starts; ``cold=False``: from the simulator's own), with the simulations
+    all the fits need at one point of their progress solved in one call of the
+    simulator's ``batch(values, warm)`` (:mod:`inverse.update`): each fit's results are
+    the ones it has run alone from that start. Returns the fits and each fit's warm
+    starts at its end (None for all when the simulator has no batch: then one fit after
+    another)."""
+    if getattr(problem.simulate, "batch", None) is None:
+        return [fit(problem, **job) for job in jobs], [None] * len(jobs)
+    threads = [_Job(problem, job) for job in jobs]
+    warm = [{} if cold else None for _ in jobs]
+    for t in threads:
+        t.start()
+        t.resume()
+    live = [n for n, t in enumerate(threads) if not t.done]
+    while live:
+        values, owner = [], []
+        for n in live:
+            values += threads[n].request[1]
+            owner += [n] * len(threads[n].request[1])
+        outs, after = _once(problem.simulate, values, [warm[n] for n in owner])
+        at = 0
+        for n in live:
+            many, vs = threads[n].request
+            if not many:
+                warm[n] = after[at]
+            reply, at = outs[at:at + len(vs)], at + len(vs)
+            threads[n].resume(reply)
+        live = [n for n in live if not threads[n].done]
+    for t in threads:
+        if t.error is not None:
+            raise t.error
+        problem.failures += t.problem.failures
+    return [t.result for t in threads], warm
 
 
 def _cv(c: FitCandidate, say) -> None:

@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-from inverse.update import Fit, UpdateProblem, fit
+from inverse.fe_selection import fit_together
+from inverse.update import Fit, UpdateProblem
 from runs.executor import run_sweep
 from runs.jsonio import to_jsonable
 from runs.store import open_manifest
@@ -176,8 +177,9 @@ def profile_branch(task, problem: UpdateProblem) -> list:
     """One branch of a profile: ``task = (name, grid, start, free, level, stop,
     bounds)``; ``grid`` ordered outward from the optimum ``start`` (all values);
     ``free`` the other fitted parameters. Each point is fitted from its neighbour's
-    optimum and from ``start``, the better kept (optimizer tolerance 1e-6: chi2 to
-    about 1e-6 relative). The first point past ``level`` (chi2 at the
+    optimum and from ``start``, the two fits together from the simulator's warm starts
+    (:func:`inverse.fe_selection.fit_together`), the better kept (optimizer tolerance
+    1e-6: chi2 to about 1e-6 relative). The first point past ``level`` (chi2 at the
     interval's edge) is bracketed by 2 bisections; a branch still under ``level`` at the
     end of its grid goes on with doubling steps (at most 4) inside ``bounds``; it stops
     after the first point past ``stop`` or at a failed fit."""
@@ -192,8 +194,9 @@ def profile_branch(task, problem: UpdateProblem) -> list:
     def at(v, st):
         # two starts: the neighbour's optimum and the overall one (a sharp feature such
         # as a macro-slip onset makes the profile multimodal)
-        f = min((fit(problem, others, start=s, fixed={name: v}, tol=1e-6) for s in (st, start)),
-                key=lambda f: (not f.success, f.chi2))
+        fits = fit_together(problem, [dict(free=others, start=s, fixed={name: v}, tol=1e-6)
+                                      for s in (st, start)], cold=False)[0]
+        f = min(fits, key=lambda f: (not f.success, f.chi2))
         if not f.success:
             return ProfilePoint(v, f.chi2)
         extra = problem.figures(f.values)

@@ -2,10 +2,14 @@
 
 The simulator is any callable ``simulate(values) -> (omega2, zeta)`` giving the natural
 frequency squared (rad^2/s^2) and damping ratio of one mode at every level of a test
-series (e.g. the nonlinear FE double beam, :mod:`feloop.levels`); the
-parameters are named, bounded scalars (:class:`Parameter`). The fit is weighted least
-squares, i.e. Gaussian maximum likelihood with known noise levels
-(:class:`NoiseModel`)::
+series (e.g. the nonlinear FE double beam, :mod:`feloop.levels`), warm-started from its
+last call or not; optionally with ``simulate.batch(values_list, warm=None) -> (outputs,
+warm_after)``: every set of the list from the warm starts ``warm[i]`` (None: its own,
+which a batch leaves as they are), per set ``(omega2, zeta)`` or the exception of a
+failed simulation, and its warm starts after it (the difference Jacobian's columns in
+one call; :func:`inverse.fe_selection.fit_together`). The parameters are named, bounded
+scalars (:class:`Parameter`). The fit is weighted least squares, i.e. Gaussian maximum
+likelihood with known noise levels (:class:`NoiseModel`)::
 
     chi2(theta) = sum_{v in fit} [((omega2_v(theta) - omega2_v) / s_omega2,v)^2
                                  + ((zeta_v(theta) - zeta_v) / s_zeta,v)^2],        (1)
@@ -55,6 +59,7 @@ repeatability, the same noise as the one-mode diagnosis.
 """
 from __future__ import annotations
 
+import inspect
 import math
 import time
 from dataclasses import dataclass, field
@@ -132,12 +137,29 @@ class UpdateProblem:
     def residuals(self, values: dict, mask=None) -> np.ndarray:
         """Eq. (1)'s residual vector on ``mask`` (default the fit levels); a failed
         simulation counts in ``failures`` and gives ``_FAILED`` per residual."""
-        m = self.fit_mask if mask is None else np.asarray(mask, dtype=bool)
         try:
-            om2, ze = self.simulate(values)
-        except SIMULATION_FAILURES:
+            out = self.simulate(values)
+        except SIMULATION_FAILURES as exc:
+            out = exc
+        return self.residuals_of(out, mask)
+
+    def residuals_many(self, values: list, mask=None) -> list:
+        """:meth:`residuals` of every parameter set of ``values``: simulated together
+        by the simulator's ``batch`` where it has one (each set from its present warm
+        start), else one after another."""
+        batch = getattr(self.simulate, "batch", None)
+        if batch is None:
+            return [self.residuals(v, mask) for v in values]
+        return [self.residuals_of(out, mask) for out in batch(values)[0]]
+
+    def residuals_of(self, out, mask=None) -> np.ndarray:
+        """:meth:`residuals` of a simulator's output ``out``: ``(omega2, zeta)``, or the
+        exception of a failed simulation."""
+        m = self.fit_mask if mask is None else np.asarray(mask, dtype=bool)
+        if isinstance(out, BaseException):
             self.failures += 1
             return np.full(2 * int(m.sum()), _FAILED)
+        om2, ze = out
         r = np.concatenate([(om2[m] - self.omega2[m]) / self.noise.sigma_omega2[m],
                             (ze[m] - self.zeta[m]) / self.noise.sigma_zeta[m]])
         if not np.all(np.isfinite(r)):
@@ -268,20 +290,36 @@ def _decrement(J, r, active_mask, free, side) -> float:
     return float(gauss_newton_decrement(J.T[None], r[None], held[None])[0])
 
 
-def _check_jacobian(fun, u, r, lo, hi, h: float = CHECK_STEP):
-    """Jacobian of ``fun`` at ``u`` (residuals ``r``) by central differences of step
-    ``h`` (one-sided three-point rule where ``u +- h`` leaves ``[lo, hi]``), and the
-    evaluations it took."""
-    J = np.zeros((r.size, u.size))
+def _check_jacobian(funs, u, r, lo, hi, h: float = CHECK_STEP):
+    """Jacobian at ``u`` (residuals ``r``) by central differences of step ``h``
+    (one-sided three-point rule where ``u +- h`` leaves ``[lo, hi]``), ``funs`` giving
+    the residuals of a list of points; and the evaluations it took."""
+    points, side = [], []
     for j in range(u.size):
         e = np.zeros(u.size)
         e[j] = h
-        if lo[j] <= u[j] - h and u[j] + h <= hi[j]:
-            J[:, j] = (fun(u + e) - fun(u - e)) / (2.0 * h)
-        else:
-            s = 1.0 if u[j] + 2.0 * h <= hi[j] else -1.0
-            J[:, j] = (-3.0 * r + 4.0 * fun(u + s * e) - fun(u + 2.0 * s * e)) / (2.0 * s * h)
+        s = 0.0 if lo[j] <= u[j] - h and u[j] + h <= hi[j] else \
+            (1.0 if u[j] + 2.0 * h <= hi[j] else -1.0)
+        points += [u + e, u - e] if s == 0.0 else [u + s * e, u + 2.0 * s * e]
+        side.append(s)
+    f = funs(points)
+    J = np.zeros((r.size, u.size))
+    for j, s in enumerate(side):
+        a, b = f[2 * j], f[2 * j + 1]
+        J[:, j] = (a - b) / (2.0 * h) if s == 0.0 else (-3.0 * r + 4.0 * a - b) / (2.0 * s * h)
     return J, 2 * u.size
+
+
+#: scipy's least_squares evaluates its difference Jacobian through a map it is given.
+_MAP = "workers" in inspect.signature(least_squares).parameters
+
+
+def _columns(problem: UpdateProblem, funs) -> dict:
+    """The map of the optimizer's difference Jacobian: all columns in one ``funs`` call
+    (the simulator's batch) when the simulator has one and scipy takes a map."""
+    if _MAP and getattr(problem.simulate, "batch", None) is not None:
+        return {"workers": lambda _fun, points: funs(list(points))}
+    return {}
 
 
 def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | None = None,
@@ -325,6 +363,9 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
     def fun(u):
         return problem.residuals(at(u), mask)
 
+    def funs(us):          # a list of points at once (the simulator's batch)
+        return problem.residuals_many([at(u) for u in us], mask)
+
     failed0 = problem.failures
     if not free:
         r = fun(u0)
@@ -335,7 +376,8 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
                    decrement=0.0, feasible=ok)   # nothing free: the evaluation is all
     try:
         res = least_squares(fun, u0, bounds=(lo, hi), method="trf", diff_step=1e-6,
-                            x_scale=1.0, max_nfev=max_nfev, xtol=tol, ftol=tol, gtol=tol)
+                            x_scale=1.0, max_nfev=max_nfev, xtol=tol, ftol=tol, gtol=tol,
+                            **_columns(problem, funs))
     except ValueError as exc:
         raise InternalError(f"internal failure: the fit of {', '.join(free)} stopped: "
                             f"{exc}") from exc
@@ -347,7 +389,7 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
     ok = bool(np.all(np.abs(r) < _FAILED))
     dec, nfev = _decrement(res.jac, r, res.active_mask, free, side), int(res.nfev)
     if ok and dec > DECREMENT_TOL:          # the optimizer's Jacobian may carry round-off
-        Jc, extra = _check_jacobian(fun, res.x, r, lo, hi)
+        Jc, extra = _check_jacobian(funs, res.x, r, lo, hi)
         dec, nfev = _decrement(Jc, r, res.active_mask, free, side), nfev + extra
     return Fit(values=best, free=free, chi2=float(r @ r), n=r.size, cov=cov,
                nfev=nfev, seconds=time.perf_counter() - t0,

@@ -13,6 +13,7 @@ import numpy as np
 
 from cases.double_beam.calibration import calibrate_clamp_length
 from cases.double_beam.model import DoubleBeamConfig, build_double_beam
+from feloop.case_levels import linear_part
 from feloop.levels import FELevels, LinearPart
 from fe.beam import W
 
@@ -45,7 +46,7 @@ class DoubleBeamLevels(FELevels):
             w = model.dofmaps[0].component(model.full_vector(phi), W)
             return float(np.sum(model.mesh.tributary_length() * np.abs(w) ** 3))
 
-        return self.reduce(model, K_T, lambda3, width=cfg.width, grip=cfg.grip)
+        return linear_part(self, model, K_T, lambda3, width=cfg.width, grip=cfg.grip)
 
     def structure(self, lin: LinearPart) -> str:
         if self.config.clamp_length is None:
