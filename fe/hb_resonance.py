@@ -23,7 +23,7 @@ filter, :mod:`ident.modal_filter`) is purely imaginary, i.e. ``Re q_k = 0``; the
 damping ratio at that level as the stepped-sine test sees them (for a linear modally
 damped structure exactly ``omega_k^2`` and its ``zeta``). The frequency is found by the
 secant method on ``Re D_k``, each step a warm-started Newton solve of (1).
-:func:`fe.hb_response.resonance_batch` solves many such problems at once, by Newton's
+:func:`fe.hb_batch.resonance_batch` solves many such problems at once, by Newton's
 method on (1) and the phase condition together where a guess is at hand.
 :func:`frf_levels` sweeps frequency lines (natural continuation) for simulated FRFs.
 SI units: rad/s, m, N.
@@ -124,7 +124,7 @@ def _per_level(e, rows):
 class _Balance:
     """The condensed equations (1) of every level (vectorized over levels), every
     quantity row by row (coefficients and damping held per level). Levels may come in
-    *groups* (``group``, ``starts``: the problems :func:`fe.hb_response.resonance_batch`
+    *groups* (``group``, ``starts``: the problems :func:`fe.hb_batch.resonance_batch`
     stacks), each taking the describing function's micro-slip shortcut as its own call
     would. ``like``: a balance of the same model, load and rows (its checks reused)."""
 

@@ -7,8 +7,7 @@ FE model (:func:`fe.reduction.reduced_basis` with static joint modes) with one c
 four-parameter Iwan element per joint element, driven at each level's force, solved by
 first-harmonic balance with the exact describing function at the phase resonance of the
 mode's modal filter (:func:`fe.hb_resonance.resonance_levels`; many parameter sets at once,
-warm-started, :func:`fe.hb_response.resonance_batch`). One campaign of 10 levels takes a
-few ms. A case supplies only :meth:`FELevels._build` (its FE model at a joint stiffness
+:func:`fe.hb_batch.resonance_batch`): a few ms per campaign of 10 levels. A case supplies only :meth:`FELevels._build` (its FE model at a joint stiffness
 K_T, calibrated as the case calibrates), e.g. :class:`feloop.case_levels.CaseLevels`.
 
 Parameters (SI units; how each enters):
@@ -51,7 +50,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fe.hb_response import resonance_batch, response_levels
+from fe.hb_batch import resonance_batch
+from fe.hb_response import response_levels
 from inverse.iwan_modal import r_tilde
 from inverse.update import SIMULATION_FAILURES
 from inverse.random_amplitude import rayleigh_nodes
@@ -278,7 +278,7 @@ class FELevels:
         """:meth:`predict` of every set of ``ps`` from its warm starts ``warm[i]`` (dicts
         like the model's own, left as they are; None: the model's own): per set its
         LevelPrediction or the exception :meth:`predict` raises, and its warm starts after
-        it; on the force route together, each as alone (:func:`fe.hb_response.resonance_batch`)."""
+        it; on the force route together, each as alone (:func:`fe.hb_batch.resonance_batch`)."""
         warm = [self._warm if w is None else w for w in (warm or [None] * len(ps))]
         out, new, todo = [None] * len(ps), list(warm), {}
         for i, p in enumerate(ps):
