@@ -39,37 +39,27 @@ def test_independent_generator_imports_nothing_from_inverse():
     assert out == "[]"
 
 
-@pytest.fixture(scope="module")
-def hardening():
-    """Seed 5 of the independent generator, stiffening family (the size and the shape
-    ``(F/F_top)^p`` drawn from the seed: p = 2.3, so the effect shows at the top)."""
-    return draw_case(5, "geometric-hardening")
-
-
 @pytest.mark.slow
-def test_independent_hardening_plants_the_drawn_size(hardening):
+def test_independent_hardening_plants_the_drawn_size_and_is_named_with_all_levels():
     """Same seed, same structure and noise: the stiffening family raises the top
     level's omega^2 by the drawn size in noise units (identified through the
-    multi-harmonic stepped sine and LSCF), and leaves level 1 (F/F_top = 1/512) alone."""
+    multi-harmonic stepped sine and LSCF), and leaves level 1 (F/F_top = 1/512) alone.
+    The same draw (seed 5: the shape ``(F/F_top)^p`` drawn with p = 2.3, so the effect
+    shows at the top) goes on to the all-levels verdict below."""
     base = draw_case(5, "none")
-    hard = hardening
+    hard = draw_case(5, "geometric-hardening")
     t = hard.truth
     rise = hard.data.omega2 / base.data.omega2 - 1.0
     assert rise[-1] == pytest.approx(t["size_sigma"] * t["sigma_omega2_rel"], rel=0.1)
     assert abs(rise[0]) < 1e-3 * rise[-1]
     assert base.truth["n_joints"] != 5 and base.truth["K_T"] != 1e8
-
-
-@pytest.mark.slow
-def test_a_hardening_at_the_top_is_named_with_all_levels_and_its_misses_come_first(hardening):
-    """The paper's protocol (fit the lower levels, hold out the top three) on a hardening
-    that shows at the top: the held-out levels miss their intervals and are said first;
-    judged with every level fitted the FE cause is the hardening, by a cross-validated
-    gain > 1; its leave-top-out gain is kept beside it (docs/fe-loop.md, "One verdict
-    from all levels")."""
+    # the paper's protocol (fit the lower levels, hold out the top three): the held-out
+    # levels miss and are said first; judged with every level fitted the FE cause is the
+    # hardening, by a cross-validated gain > 1, its leave-top-out gain kept beside it
+    # (docs/fe-loop.md, "One verdict from all levels")
     from feloop.diagnosis import fe_diagnosis
 
-    r = fe_diagnosis(hardening.data, levels=DoubleBeamLevels.from_data)["fe"]
+    r = fe_diagnosis(hard.data, levels=DoubleBeamLevels.from_data)["fe"]
     assert r["held_out_levels"] == [8, 9, 10]
     assert r["cause"] == "geometric-hardening" and r["verdict"]["judged_on"] == "all levels"
     assert r["all_levels"]["gain"] > 1.2
@@ -79,18 +69,6 @@ def test_a_hardening_at_the_top_is_named_with_all_levels_and_its_misses_come_fir
     assert all(m["by"] for m in r["misses"])          # every miss names its channel(s)
     assert all(math.isfinite(row["z_frequency"]) for row in r["held_out"])
     assert r["verdict"]["agreement"]                  # fit levels alone: said beside it
-
-
-@pytest.mark.slow
-def test_all_levels_judged_raise_no_alarm_on_a_series_without_a_hidden_mechanism():
-    """The same rule on an independent series with nothing hidden (seed 2: its top level
-    misses the base model's interval, another glue discretization and K_T than the
-    fitted model's): with all levels fitted the FE cause stays ``none``."""
-    from feloop.diagnosis import fe_diagnosis
-
-    r = fe_diagnosis(draw_case(2, "none").data, levels=DoubleBeamLevels.from_data)["fe"]
-    assert r["verdict"]["judged_on"] == "all levels"
-    assert r["cause"] == "none" and r["fit_levels_verdict"]["cause"] == "none"
 
 
 @pytest.mark.slow
@@ -116,6 +94,12 @@ def test_no_false_alarm_on_an_independent_series_without_a_hidden_mechanism():
                                           for e in r["evidence"].values())
     assert r["verdict_own_scatter"] is None          # nothing capped: no second verdict
     assert r["estimator_start"] == "used"
+    # the paper's protocol on the same series (its held-out levels miss the base model's
+    # intervals: another glue discretization and K_T than the fitted model's): judged
+    # with all levels fitted the FE cause stays none
+    r = fe_diagnosis(case.data, levels=DoubleBeamLevels.from_data)["fe"]
+    assert r["verdict"]["judged_on"] == "all levels"
+    assert r["cause"] == "none" and r["fit_levels_verdict"]["cause"] == "none"
 
 
 @pytest.mark.slow
