@@ -36,7 +36,7 @@ from feloop.engagement import KT_GRID, check_engagement, engagement
 from feloop.levels import BASE_PARAMETERS, FELevels, Simulator
 from inverse import judge
 from inverse.diagnosis.causes import CATALOGUE
-from inverse.fe_selection import FitCandidate, judge_extensions
+from inverse.fe_selection import FitCandidate, fit_together, judge_extensions
 from inverse.estimate import estimate
 from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Parameter,
                             UpdateProblem, fit)
@@ -162,16 +162,14 @@ FIT_TOL = 1e-6
 
 
 def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
-    """The best fit from ``starts``, and the starts."""
-    best = None
-    reset = getattr(problem.simulate, "reset", None)
-    for s in starts:
-        f = fit(problem, free, start=s, tol=FIT_TOL)
-        if not f.success and reset is not None:
-            reset()        # a failed start leaves no warm starts to the next one
-        if best is None or (f.success, -f.chi2) > (best.success, -best.chi2):
-            best = f
-    return best, list(starts)
+    """The best fit from ``starts`` (all of them together, each from a cold start:
+    :func:`inverse.fe_selection.fit_together`), and the starts, the best one's first
+    (the cross-validation folds refit from it first, :func:`inverse.fe_selection.
+    cross_validate`)."""
+    starts = list(starts)
+    fits, _ = fit_together(problem, [dict(free=free, start=s, tol=FIT_TOL) for s in starts])
+    order = sorted(range(len(fits)), key=lambda n: (not fits[n].success, fits[n].chi2, n))
+    return fits[order[0]], [starts[n] for n in order]
 
 
 def cold_failure(fe: FELevels, f, ext=None) -> str | None:

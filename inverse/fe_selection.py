@@ -7,9 +7,10 @@ units over both channels (omega2 and zeta), ``sqrt(mean r^2)``:
 
 * :func:`cross_validate`: leave-one-level-out over the interior fit levels (the lowest
   and highest fit level always stay in: they anchor the amplitude range). Each fold
-  repeats the candidate's whole fit: from every one of its *original* starts, the best
-  kept (never from the full optimum, which has seen the left-out level); all these fits
-  from a cold start, run together (:func:`fit_together`: the simulations they need at
+  repeats the candidate's whole fit from its *original* start that reached the full
+  optimum (never from the full optimum, which has seen the left-out level), and from
+  its other starts where that fold's fit fails, the best kept; all these fits from a
+  cold start, run together (:func:`fit_together`: the simulations they need at
   one point of their progress in one batch of the simulator); a fold whose fit or
   prediction fails, or whose fit did not converge (:attr:`inverse.update.Fit.converged`:
   its prediction would depend on where the optimizer stopped), is counted as failed, and
@@ -74,26 +75,37 @@ def held_out_errors(problem: UpdateProblem, values: dict) -> float | None:
 
 def cross_validate(problem: UpdateProblem, result: Fit, starts, tol: float = 1e-8) -> tuple:
     """Leave-one-level-out rms error over the interior fit levels (module docstring),
-    each fold refitted from every start of ``starts`` (optimizer tolerance ``tol``), the
-    best kept; every fit from a cold start, all of them together (:func:`fit_together`).
-    Returns ``(error or None, failed folds, of them those whose fit did not
-    converge)``."""
+    each fold refitted from the first of ``starts`` (the one the full fit's optimum came
+    from, :func:`feloop.select.fit_base`), a fold whose fit fails or does not converge
+    from it refitted from the others, the best kept; every fit from a cold start, each
+    pass together (:func:`fit_together`). Optimizer tolerance ``tol``. Returns ``(error
+    or None, failed folds, of them those whose fit did not converge)``."""
     idx = np.flatnonzero(problem.fit_mask)
     starts = list(starts or [{}])
     masks = []
     for i in idx[1:-1]:
         m = problem.fit_mask.copy()
         m[i] = False
-        masks.append((i, m))
-    fits, warm = fit_together(problem, [dict(free=result.free, start=s, mask=m, tol=tol)
-                                        for _, m in masks for s in starts])
-    best = [min(range(j * len(starts), (j + 1) * len(starts)),
-                key=lambda n: (not fits[n].success, fits[n].chi2)) for j in range(len(masks))]
-    one = [np.arange(problem.fit_mask.size) == i for i, _ in masks]
+        masks.append(m)
+
+    def together(jobs):
+        fits, warm = fit_together(problem, [dict(free=result.free, start=s, mask=masks[j],
+                                                 tol=tol) for j, s in jobs])
+        return list(zip(fits, warm))
+
+    def worse(fw):
+        return (not (fw[0].success and fw[0].converged), fw[0].chi2)
+
+    best = together([(j, starts[0]) for j in range(len(masks))])
+    retry = [j for j, fw in enumerate(best) if not (fw[0].success and fw[0].converged)]
+    again = together([(j, s) for j in retry for s in starts[1:]])
+    for n, j in enumerate(retry):
+        best[j] = min([best[j]] + again[n * (len(starts) - 1):(n + 1) * (len(starts) - 1)],
+                      key=worse)
+    one = [np.arange(problem.fit_mask.size) == i for i in idx[1:-1]]
     r2, failed, unconverged = [], 0, 0
-    for n, r in zip(best, _residuals(problem, [fits[n].values for n in best],
-                                     [warm[n] for n in best], one)):
-        f = fits[n]
+    for (f, _), r in zip(best, _residuals(problem, [f.values for f, _ in best],
+                                          [w for _, w in best], one)):
         if not f.converged or r is None:
             failed += 1
             unconverged += f.feasible and not f.converged
