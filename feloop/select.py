@@ -161,15 +161,37 @@ def untestable(data, catalogue=None) -> dict:
 FIT_TOL = 1e-6
 
 
-def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS) -> tuple:
-    """The best fit from ``starts`` (all of them together, each from a cold start:
-    :func:`inverse.fe_selection.fit_together`), and the starts, the best one's first
-    (the cross-validation folds refit from it first, :func:`inverse.fe_selection.
-    cross_validate`)."""
+#: Two successful fits from different starts reached the same optimum when their chi2
+#: agree within this fraction of ``1 + chi2`` (distinct optima of these models differ
+#: by order one; a fit converged to ``FIT_TOL`` repeats its chi2 to ~1e-6).
+SAME_OPTIMUM = 1e-3
+
+
+def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS, only=None) -> tuple:
+    """The best fit from ``starts`` (those at the indices ``only``, default all; all of
+    them together, each from a cold start: :func:`inverse.fe_selection.fit_together`).
+    Returns the fit, every start with the fitted ones first, best first (the
+    cross-validation folds refit from the first, the others where a fold fails:
+    :func:`inverse.fe_selection.cross_validate`), and the indices of the starts that
+    reached distinct optima (:data:`SAME_OPTIMUM`; every failed one kept), for a fit
+    with more levels (:func:`fe_select`, ``earlier``). When every start of ``only``
+    fails, every start is fitted."""
     starts = list(starts)
-    fits, _ = fit_together(problem, [dict(free=free, start=s, tol=FIT_TOL) for s in starts])
+    idx = list(range(len(starts)) if only is None else only)
+    fits, _ = fit_together(problem, [dict(free=free, start=starts[i], tol=FIT_TOL)
+                                     for i in idx])
     order = sorted(range(len(fits)), key=lambda n: (not fits[n].success, fits[n].chi2, n))
-    return fits[order[0]], [starts[n] for n in order]
+    if only is not None and not fits[order[0]].success:
+        return fit_base(problem, starts, free)     # every start, as with no ``only``
+    kept = []
+    for n in order:
+        if not any(fits[n].success and fits[m].success and abs(fits[n].chi2 - fits[m].chi2)
+                   <= SAME_OPTIMUM * (1.0 + fits[m].chi2) for m in kept):
+            kept.append(n)
+    first = [idx[n] for n in order]
+    rest = [i for i in range(len(starts)) if i not in first]
+    return (fits[order[0]], [starts[i] for i in first + rest],
+            (len(starts), tuple(idx[n] for n in kept)))
 
 
 def cold_failure(fe: FELevels, f, ext=None) -> str | None:
@@ -199,15 +221,25 @@ def _problem(base_problem, fe, ext, base_pred, top):
                          describe=Headline(fe, ~base_problem.fit_mask, ext))
 
 
-def _fit_extension(problem, ext, start_values, chi_starts):
-    """Multi-start fit of ``ext`` (its starts x ``chi_starts``) from ``start_values``;
-    (fit or None, the starts)."""
+def _fit_extension(problem, ext, start_values, chi_starts, basins=None):
+    """Multi-start fit of ``ext`` (its starts x ``chi_starts``) from ``start_values``,
+    only the starts of :func:`_basin_starts`; (fit or None, the starts, the distinct
+    optima: :func:`fit_base`)."""
     free = BASE_PARAMETERS + tuple(ext.parameter_names)
     specs = [problem.parameters[n] for n in ext.parameter_names]
     starts = [dict(start_values, chi=chi, **s0) for s0 in ext.start_sets(specs)
               for chi in chi_starts]
-    f, s = fit_base(problem, starts, free)
-    return (f if f is not None and f.success else None), s
+    f, s, kept = fit_base(problem, starts, free, _basin_starts(starts, basins, ext.cause))
+    return (f if f is not None and f.success else None), s, kept
+
+
+def _basin_starts(starts: list, basins: dict | None, name: str) -> list | None:
+    """The indices of the starts of candidate ``name`` whose fit to fewer levels reached
+    a distinct optimum (``basins``: the ``basins`` of that :func:`fe_select` result,
+    name -> (number of starts, indices)), where that choice had as many starts; else
+    None (all of them)."""
+    n, kept = (basins or {}).get(name, (None, ()))
+    return list(kept) if n == len(starts) and kept else None
 
 
 def _inactive(ext, f) -> bool:
@@ -219,37 +251,45 @@ def _inactive(ext, f) -> bool:
 
 
 def fe_select(data, mask, fe: FELevels, causes=None,
-              progress=None, cap: bool = True) -> dict:
+              progress=None, cap: bool = True, earlier: dict | None = None) -> dict:
     """Fit and judge the FE candidates on the fit levels ``mask`` (module docstring);
     ``causes``: the extensions to try (None: every one; empty: the base model alone);
     ``cap``: judge a scatter far above the assumed rig repeatability against it
-    (:func:`fe_noise`).
+    (:func:`fe_noise`); ``earlier``: the choice on fewer levels of the same data
+    (for the choice with all levels, :func:`feloop.verdict.all_levels_choice`): its
+    engagement check is taken, and each candidate fitted only from its starts that
+    reached distinct optima there (its ``basins``, :func:`_basin_starts`).
 
     Returns ``fe``, ``noise`` (update form), ``judge_noise``, ``base`` (FitCandidate),
     ``extensions`` (name -> (Extension, FitCandidate)), ``judged`` (the dict of
     :func:`inverse.fe_selection.judge_extensions`), ``untested`` (cause -> reason),
-    ``chosen`` (name of the selected candidate: the closest one when unexplained) and
+    ``chosen`` (name of the selected candidate: the closest one when unexplained),
     ``estimator_start`` ("used", or why the paper's estimator gave no start:
-    :func:`estimator_start`) and ``engagement`` (:mod:`feloop.engagement`:
-    checked first; data that move the mode more than its joints can are one line, exit
-    2, never a fit)."""
+    :func:`estimator_start`), ``basins`` (candidate -> the distinct optima of
+    :func:`fit_base`) and
+    ``engagement`` (:mod:`feloop.engagement`: checked first; data that move the mode
+    more than its joints can are one line, exit 2, never a fit)."""
     jn, noise = fe_noise(data, cap)
-    engaged = check_engagement(engagement(data, fe, noise, 10.0 ** max(KT_GRID)))
+    engaged = earlier["engagement"] if earlier else \
+        check_engagement(engagement(data, fe, noise, 10.0 ** max(KT_GRID)))
+    basins = earlier["basins"] if earlier else None
     try:
-        return {**_select(data, mask, fe, causes, progress or (lambda s: None), (jn, noise)),
-                "engagement": engaged}
+        return {**_select(data, mask, fe, causes, progress or (lambda s: None), (jn, noise),
+                          basins), "engagement": engaged}
     except ValueError as exc:          # the input was checked before: ours, not the user's
         raise InternalError(f"internal failure in the FE model choice: {exc}") from exc
 
 
-def _select(data, mask, fe, causes, say, noises) -> dict:
+def _select(data, mask, fe, causes, say, noises, basins) -> dict:
     jn, noise = noises                       # fe_noise of the data, computed once
     estimated = estimator_start(data, [int(v) for v in data.level[mask]])
     P, starts = base_parameters(data, mask, fe, estimated)
     base_problem = UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P,
                                  describe=Headline(fe, ~mask))
     say("base")
-    bfit, base_starts = fit_base(base_problem, starts)
+    found = {}
+    bfit, base_starts, found["none"] = fit_base(base_problem, starts, BASE_PARAMETERS,
+                                                _basin_starts(starts, basins, "none"))
     if not bfit.success:
         raise InternalError(f"the base FE model could not be fitted from any of its "
                             f"{len(base_starts)} starts ({bfit.message})")
@@ -272,7 +312,7 @@ def _select(data, mask, fe, causes, say, noises) -> dict:
         ext = EXTENSIONS[cause]
         try:
             prob = _problem(base_problem, fe, ext, base_pred, top)
-            f, s = _fit_extension(prob, ext, bfit.values, chi_starts)
+            f, s, found[cause] = _fit_extension(prob, ext, bfit.values, chi_starts, basins)
         except (InternalError, ValueError, ArithmeticError) as exc:
             # one cause that cannot be set up is counted and reported, not fatal
             exts[cause] = (ext, FitCandidate((cause,), base_problem, None, [],
@@ -301,15 +341,16 @@ def _select(data, mask, fe, causes, say, noises) -> dict:
             say(f"{first} + {other}")
             pair = Combined(EXTENSIONS[first], EXTENSIONS[other])
             prob = _problem(base_problem, fe, pair, base_pred, top)
-            f, s = _fit_extension(prob, pair, exts[first][1].fit.values,
-                                  [exts[first][1].fit.values["chi"]])
+            f, s, found[pair.cause] = _fit_extension(prob, pair, exts[first][1].fit.values,
+                                                     [exts[first][1].fit.values["chi"]],
+                                                     basins)
             why = cold_failure(fe, f, pair)
             exts[pair.cause] = (pair, FitCandidate((first, other), prob, None if why else f,
                                                    s, why))
     judged = judge_extensions(base, [c for _, c in exts.values()], jn, progress=say)
     return {"fe": fe, "noise": noise, "judge_noise": jn, "base": base, "extensions": exts,
             "judged": judged, "untested": skip, "chosen": judged["selection"].best,
-            "estimator_start": estimated[1] or "used"}
+            "estimator_start": estimated[1] or "used", "basins": found}
 
 
 def chosen_model(s: dict, name: str | None = None):

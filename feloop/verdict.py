@@ -69,7 +69,8 @@ def all_levels_choice(data, mask, fe, fit_choice: dict, causes=None,
     if mask.all():
         return None
     say = progress or (lambda m: None)
-    s = fe_select(data, np.ones_like(mask), fe, causes, lambda m: say(f"all levels: {m}"))
+    s = fe_select(data, np.ones_like(mask), fe, causes, lambda m: say(f"all levels: {m}"),
+                  earlier=fit_choice)
     return {**verdict_of(s), "gain_leave_top_out": leave_top_out_gain(fit_choice, s["chosen"]),
             "levels": [int(v) for v in data.level], "evidence": s["judged"]["evidence"],
             "choice": s}

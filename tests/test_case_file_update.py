@@ -50,7 +50,7 @@ def _fit(case, data, noise=None):
     mask = data.level <= 7
     noise = fe_noise(data)[1] if noise is None else noise
     P, starts = base_parameters(data, mask, fe)
-    f, _ = fit_base(UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P), starts)
+    f, _, _ = fit_base(UpdateProblem(Simulator(fe), data.omega2, data.zeta, noise, mask, P), starts)
     assert f.success
     return f
 
