@@ -55,6 +55,7 @@ def fit_block(fit, parameters: dict) -> dict:
                                "scaled by the misfit",
             "at_bound": {n: fit.at_bound.get(n, False) for n in fit.free},
             "bounds": {n: [parameters[n].lower, parameters[n].upper] for n in fit.free},
+            "bounds_kind": "[lower, upper]; null: unbounded on that side",
             "converged": fit.converged}
 
 
@@ -163,7 +164,9 @@ def read_given(path, case_name: str) -> GivenModel:
                   chi2=float(fb["chi2"]), n=int(fb["n_residuals"]), cov=cov, nfev=0,
                   seconds=0.0, success=True, at_bound=dict(fb["at_bound"]),
                   converged=bool(fb.get("converged", True)))
-        bounds = {n: Bounds(float(lo), float(hi)) for n, (lo, hi) in fb["bounds"].items()}
+        bounds = {n: Bounds(-math.inf if lo is None else float(lo),     # JSON: no inf
+                            math.inf if hi is None else float(hi))
+                  for n, (lo, hi) in fb["bounds"].items()}
         data = {"source": str(db["source"]), "mode": int(db["mode"]),
                 "force_scale": float(db["force_scale"]),
                 "levels": [int(v) for v in db["levels"]], "digest": str(db["digest"])}

@@ -166,3 +166,19 @@ def test_loop_reports_what_the_given_model_gets_wrong(updated, tmp_path, capsys)
     bad.write_text(json.dumps({**json.loads(model.read_text()), "case": "brb"}))
     _one_line_exit_2(capsys, ["loop", "--case", str(case), "--model", str(bad), "--out",
                               str(tmp_path / "l2"), "--no-progress"], "the update of case")
+
+
+def test_an_unbounded_side_survives_the_json(updated, tmp_path):
+    """JSON has no inf: an unbounded side (the air drag's C_D >= 0) is written null and
+    read back as inf, the rest of the fit block exactly."""
+    from feloop.given_model import read_given
+
+    case, model, s = updated
+    doc = json.loads(model.read_text())
+    doc["fit"]["bounds"]["ln_dc1"] = [None, None]
+    path = tmp_path / "unbounded.json"
+    path.write_text(json.dumps(doc))
+    g = read_given(path, doc["case"])
+    assert g.bounds["ln_dc1"].lower == -np.inf and g.bounds["ln_dc1"].upper == np.inf
+    assert g.bounds["chi"].lower == doc["fit"]["bounds"]["chi"][0]
+    assert g.fit.values == s["fit"]["values"] and g.fit.chi2 == s["fit"]["chi2"]
