@@ -11,6 +11,14 @@ Scores at the held-out levels (both channels, in noise units of the judge's nois
 
 Writes ``report.md`` (one page, with ``update_levels.png``), ``loop.json`` and, in
 ``update/``, every file of ``iwanfe update``; returns the JSON-ready summary.
+
+``loop --model DIR/updated_model.json`` (a model ``update`` wrote for the same case and
+data): the loop is run as without it (its fits start from the data, the estimator and
+fixed chi starts, never from the case file's nominal joint, so a given model has nothing
+to start), and beside it the report says what the given model gets wrong at every level
+(its predictions against the measured values, in the noise sd of the judge's noise
+model, rms at its fit levels and at the others) next to the loop's own updated model
+(:func:`given_model_check`, ``given_model`` in ``loop.json``).
 """
 from __future__ import annotations
 
@@ -23,7 +31,8 @@ import numpy as np
 
 from runs.jsonio import to_jsonable
 
-__all__ = ["held_out_scores", "run_loop", "format_summary", "markdown"]
+__all__ = ["held_out_scores", "given_model_check", "run_loop", "format_summary",
+           "markdown"]
 
 
 def held_out_scores(data, mask, noise, prediction) -> dict:
@@ -41,12 +50,37 @@ def held_out_scores(data, mask, noise, prediction) -> dict:
             "levels": rows}
 
 
-def run_loop(case, out, executor="serial", progress: bool = True) -> dict:
+def given_model_check(r: dict, given) -> dict:
+    """What the given model (:class:`feloop.given_model.GivenModel`, ``loop --model``)
+    gets wrong at every level of the loop's data, beside the loop's own updated model:
+    both simulated by the loop's FE-levels model, errors in the noise sd of the loop's
+    noise model; InputError (one line) for a model of other data."""
+    from feloop.given_model import level_errors
+
+    data, mask, noise = r["data"], r["fit_mask"], r["noise"]
+    given.check_data(data, r["settings"].mode_label, r["settings"].force_scale)
+    fe = r["selection"]["fe"]
+    fe.reset()                                 # a cold start, as the Monte Carlo's
+    pred = fe.predict(given.fit.values, given.extension)
+    fitted = np.isin(data.level, given.fit_levels)
+    return {"path": given.path, "model": given.candidate, "cause": given.cause,
+            "fit_levels": list(given.fit_levels), "values": dict(given.fit.values),
+            "errors": level_errors(data, noise, pred, fitted),
+            "loop_errors": level_errors(data, noise, r["prediction"], mask),
+            "same_fit_levels": bool(np.array_equal(fitted, mask))}
+
+
+def run_loop(case, out, executor="serial", progress: bool = True, model=None) -> dict:
     """Run the loop on ``case`` (a :class:`cases.case.Case` with the ``update``
-    capability) and write its files into ``out``; the summary dict."""
+    capability) and write its files into ``out``; the summary dict. ``model``: an
+    ``updated_model.json`` of ``update`` on the case, checked at every level beside
+    the loop's update (:func:`given_model_check`; the loop's fits start from the data,
+    never from a nominal joint, so the model cannot start them)."""
+    from feloop.given_model import read_given
     from feloop.update_report import summary, write_update
 
     update = case.require("update")
+    given = None if model is None else read_given(model, case.name)   # before the fits
     out = Path(out)
     r = update(executor=executor, progress=progress, store=str(out / "update" / "profiles"))
     write_update(r, out / "update")
@@ -81,6 +115,8 @@ def run_loop(case, out, executor="serial", progress: bool = True) -> dict:
         + [f"{c['parameter']} = {c['value']:.4g} ({c['kind']}) is implausible: {c['source']}"
            for c in s.get("plausibility", []) if c["verdict"] == "implausible"],
     }
+    if given is not None:
+        loop["given_model"] = given_model_check(r, given)
     out.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(out / "update" / "update_levels.png", out / "update_levels.png")
     (out / "loop.json").write_text(json.dumps(to_jsonable(loop), indent=2) + "\n",
@@ -126,7 +162,48 @@ def format_summary(s: dict) -> str:
                  f"{e['held_out']['rms_noise_units']:.1f} noise units)" if gain is not None
                  else "5. gain at the held-out levels: n/a (no cause named)")
     lines += [f"   still wrong: {m}" for m in s["still_wrong"]]
+    if s.get("given_model"):
+        lines.append(given_line(s["given_model"]))
     return "\n".join(lines)
+
+
+def given_line(g: dict) -> str:
+    """One line of what the given model (``--model``) gets wrong, beside the loop's."""
+    e, le = g["errors"], g["loop_errors"]
+
+    def sd(v):
+        return "n/a" if v is None else f"{v:.2f}"
+
+    worst = max(e["levels"], key=lambda r: max(abs(r["z_frequency"]), abs(r["z_zeta"])))
+    return (f"6. given model {g['path']} ({g['model']}, fitted to levels "
+            f"{g['fit_levels'][0]}-{g['fit_levels'][-1]}): rms error {sd(e['rms_fitted_sd'])} "
+            f"noise sd at its fit levels, {sd(e['rms_others_sd'])} at the others (the loop's "
+            f"updated model: {sd(le['rms_fitted_sd'])} / {sd(le['rms_others_sd'])} at its "
+            f"own); worst level {worst['level']}: {worst['error_hz']:+.4f} Hz "
+            f"({worst['z_frequency']:+.1f} sd) / {worst['error_zeta_percent']:+.2f} % zeta "
+            f"({worst['z_zeta']:+.1f} sd)")
+
+
+def _given_markdown(g: dict | None) -> str:
+    """The report's section on the given model (``--model``), or nothing."""
+    if not g:
+        return ""
+    rows = "\n".join(
+        f"| {a['level']}{'' if a['fitted'] else '*'} | {a['error_hz']:+.4f} | "
+        f"{a['z_frequency']:+.1f} | {a['error_zeta_percent']:+.2f} | {a['z_zeta']:+.1f} | "
+        f"{b['z_frequency']:+.1f} | {b['z_zeta']:+.1f} |"
+        for a, b in zip(g["errors"]["levels"], g["loop_errors"]["levels"]))
+    return f"""
+## The given model `{g['path']}`
+
+{given_line(g)[3:]}. Simulated by the loop's FE-levels model at every level; errors of
+the given model (Hz, % of zeta and in noise sd) beside the loop's updated model's (in
+noise sd); * = not among the given model's fit levels.
+
+| level | error [Hz] | sd | error [% zeta] | sd | loop's model, frequency sd | loop's model, zeta sd |
+| --- | --- | --- | --- | --- | --- | --- |
+{rows}
+"""
 
 
 def markdown(s: dict) -> str:
@@ -178,4 +255,4 @@ Parameters of the extended model (kind: fitted, assumed, calibrated):
 
 Error measure: {s['error_measure']}. Details (profiles, intervals, every level):
 `update/report.md`.
-"""
+{_given_markdown(s.get('given_model'))}"""

@@ -181,19 +181,29 @@ def fitted_plausibility(cf, r: dict) -> list[dict]:
 
 
 def uncertainty_builder(cf):
-    """``uncertainty(data_path, mode_label, fit_levels, force_scale, **options)``:
+    """``uncertainty(data_path, mode_label, fit_levels, force_scale, model, **options)``:
     :func:`feloop.uncertainty.run_fe_uncertainty` on the file's FE-levels model
     (``options``: its ``n_samples``, ``seed``, ``confidence``, ``distribution``, ``out``,
-    ``executor``, ``progress``; the defaults of the module docstring fill the rest)."""
-    def uncertainty(data_path=None, mode_label=None, fit_levels=None, force_scale=1.0,
-                    **options):
+    ``executor``, ``progress``; the defaults of the module docstring fill the rest).
+    ``model``: an ``updated_model.json`` of ``update`` on this file, drawn around instead
+    of ``update``'s model choice (:mod:`feloop.given_model`); its mode label, fit levels
+    and force scale are then the defaults."""
+    def uncertainty(data_path=None, mode_label=None, fit_levels=None, force_scale=None,
+                    model=None, **options):
         from casefile.build import build_model
         from casefile.calibrate import calibrate
+        from feloop.given_model import read_given
         from feloop.uncertainty import LevelsStudy, run_fe_uncertainty
 
+        given = None if model is None else read_given(model, cf.name)
+        if given is not None:
+            mode_label = given.data["mode"] if mode_label is None else mode_label
+            fit_levels = fit_levels or ",".join(map(str, given.fit_levels))
+            force_scale = given.data["force_scale"] if force_scale is None else force_scale
         d = _defaults(cf, data_path, mode_label)
         study = LevelsStudy(d["data_path"], d["mode_label"], fit_levels or d["fit_levels"],
-                            float(force_scale), cf.name)
-        model = build_model(calibrate(cf)[0]).model
-        return run_fe_uncertainty(levels_builder(cf), model, study, **options)
+                            1.0 if force_scale is None else float(force_scale), cf.name)
+        fe_model = build_model(calibrate(cf)[0]).model
+        return run_fe_uncertainty(levels_builder(cf), fe_model, study, given=given,
+                                  **options)
     return uncertainty

@@ -1,4 +1,6 @@
-"""Monte Carlo of any case's FE predictions over ``update``'s selected model.
+"""Monte Carlo of any case's FE predictions over ``update``'s selected model, or over
+a given one (``uncertainty --model DIR/updated_model.json``, :mod:`feloop.given_model`:
+its values the nominal, its stored fit the distribution, no model choice run).
 
 The nominal model is the one ``iwanfe update`` writes for the same fit levels
 (:func:`feloop.update.run_update` without ``--assumptions``: the model the one
@@ -34,7 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from feloop.update import UpdateSettings, run_update
+from feloop.update import UpdateSettings, load_levels, run_update
+from ident.errors import InputError
 from inverse.fe_selection import fit_test_of
 from inverse.sample_store import SampleStore, describe
 from inverse.uncertainty import FitDistribution, SweepInputs, run_samples, sweep_hash
@@ -146,9 +149,46 @@ def _model(u: dict) -> dict:
             "kind": "fitted", "rule": "feloop.update.run_update"}
 
 
+def _rows(data, mask, nominal, mc_f: dict, mc_z: dict) -> list:
+    """Per level: measured, nominal and the samples' quantiles (:func:`run_fe_uncertainty`)."""
+    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
+    rows = []
+    for i, lv in enumerate(data.level):
+        row = {"level": int(lv), "held_out": bool(not mask[i]),
+               "measured_frequency_hz": float(f_meas[i]), "measured_zeta": float(data.zeta[i]),
+               "nominal_frequency_hz": float(nominal.values["frequency_hz"][i]),
+               "nominal_zeta": float(nominal.values["zeta"][i])}
+        for name, mc, meas in (("frequency_hz", mc_f, f_meas[i]), ("zeta", mc_z, data.zeta[i])):
+            row[f"mc_{name}"] = {k: (None if v is None else v[i]) for k, v in mc.items()}
+            row[f"measured_{name}_inside"] = None if mc["lo"] is None else \
+                bool(mc["lo"][i] <= meas <= mc["hi"][i])
+        rows.append(row)
+    return rows
+
+
+def _source(study: LevelsStudy, levels, executor, distribution: str, given):
+    """(the update-like dict, the nominal model's report, the FitDistribution) of
+    ``update``'s model choice or of the ``given`` model (:func:`run_fe_uncertainty`)."""
+    settings = UpdateSettings(study.data_path, study.mode_label, study.fit_levels,
+                              study.force_scale)
+    if given is None:
+        u = run_update(settings, levels, executor=executor, case_name=study.case)
+        return u, _model(u), FitDistribution.from_fit(u["fit"], u["parameters"], distribution)
+    data, mask = load_levels(settings)    # the given model: its values, its fit's covariance
+    given.check_data(data, study.mode_label, study.force_scale, mask)
+    u = {"data": data, "fit_mask": mask, "extension": given.extension,
+         "fit": given.fit, "parameters": given.bounds, "candidate": given.candidate}
+    try:
+        dist = FitDistribution.from_fit(given.fit, given.bounds, distribution)
+    except ValueError as exc:
+        raise InputError(f"{given.path}: {exc}") from None
+    return u, given.summary(), dist
+
+
 def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
                        seed: int = 1, confidence: float = 0.9, distribution: str = "t",
-                       out=None, executor="serial", progress: bool = False) -> dict:
+                       out=None, executor="serial", progress: bool = False,
+                       given=None) -> dict:
     """The Monte Carlo of the module docstring.
 
     Parameters
@@ -157,6 +197,9 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     model : the case's FE model (hashed into the store's name).
     study : LevelsStudy
     out : directory of the resumable sample store ``samples-<hash12>/`` (None: none).
+    given : a :class:`feloop.given_model.GivenModel` (``uncertainty --model``): the
+        nominal and the distribution are its fit instead of ``update``'s model choice
+        (its data and fit levels must be the study's: one line otherwise).
 
     Returns
     -------
@@ -173,12 +216,9 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     if study.data_path is None:
         raise ValueError("no measured data: give FILE (the case names none)")
     t0 = time.perf_counter()
-    u = run_update(UpdateSettings(study.data_path, study.mode_label, study.fit_levels,
-                                  study.force_scale), levels, executor=executor,
-                   case_name=study.case)
+    u, nominal_model, dist = _source(study, levels, executor, distribution, given)
     data, mask, ext = u["data"], u["fit_mask"], u["extension"]
     t_sel = time.perf_counter() - t0
-    dist = FitDistribution.from_fit(u["fit"], u["parameters"], distribution)
     study = replace(study, candidate=u["candidate"])
     inputs = LevelsSweepInputs(model=model, data=data, study=study, distribution=dist,
                                simulate=simulate_levels, levels=levels, extension=ext)
@@ -188,30 +228,20 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
         {"seed": seed, "distribution": distribution, "study": describe(study)})
     nominal, samples = run_samples(inputs, n_samples, seed, store, executor, progress)
     if nominal.status != "ok":
-        raise ValueError(f"update's selected model ({u['candidate']}) is not physical at "
-                         f"its fit: {nominal.status}")
+        who = "update's selected model" if given is None else f"the given model {given.path}"
+        raise ValueError(f"{who} ({u['candidate']}) is not physical at its fit: "
+                         f"{nominal.status}")
     ok = [s for s in samples if s.status == "ok"]
     q = (0.5 * (1 - confidence), 0.5 * (1 + confidence))
     mc_f = _quantiles([s.values["frequency_hz"] for s in ok], q)
     mc_z = _quantiles([s.values["zeta"] for s in ok], q)
-    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
-    rows = []
-    for i, lv in enumerate(data.level):
-        row = {"level": int(lv), "held_out": bool(not mask[i]),
-               "measured_frequency_hz": float(f_meas[i]), "measured_zeta": float(data.zeta[i]),
-               "nominal_frequency_hz": float(nominal.values["frequency_hz"][i]),
-               "nominal_zeta": float(nominal.values["zeta"][i])}
-        for name, mc, meas in (("frequency_hz", mc_f, f_meas[i]), ("zeta", mc_z, data.zeta[i])):
-            row[f"mc_{name}"] = {k: (None if v is None else v[i]) for k, v in mc.items()}
-            row[f"measured_{name}_inside"] = None if mc["lo"] is None else \
-                bool(mc["lo"][i] <= meas <= mc["hi"][i])
-        rows.append(row)
+    rows = _rows(data, mask, nominal, mc_f, mc_z)
     chis = [float(s.values["chi"]) for s in ok]
     draws = sum(s.n_draws for s in samples)
     return {
         "case": study.case, "source": str(study.data_path), "mode": study.mode_label,
         "route": "exact describing function, phase resonance (FE-levels model)",
-        "model": _model(u),
+        "model": nominal_model,
         "distribution": {**dist.to_dict(),
                          "kept_fraction": len(samples) / draws if draws else None},
         "n_samples": int(n_samples), "seed": int(seed), "confidence": confidence,
@@ -224,4 +254,4 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
         "store": None if store is None else str(store.path),
         "executor": executor.describe() if isinstance(executor, ExecutorSpec) else str(executor),
         "computed": sum(not s.loaded for s in [nominal, *samples]),
-        "timing_s": {"model choice (as update)": t_sel, "total": time.perf_counter() - t0}}
+        "timing_s": {"model choice (as update)" if given is None else "given model": t_sel, "total": time.perf_counter() - t0}}

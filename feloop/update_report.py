@@ -3,7 +3,8 @@
 :func:`summary` turns :func:`feloop.update.run_update`'s result into
 one JSON-ready dict; :func:`format_text` and :func:`markdown` word it;
 :func:`write_update` writes ``updated_model.json`` (the model: every parameter with
-its kind and interval, the joint it makes), ``update.json`` (everything),
+its kind and interval, the joint it makes, the fit's values and covariance and the data
+it was fitted to, :mod:`feloop.given_model`), ``update.json`` (everything),
 ``report.md``, ``update_levels.png`` and ``update_profiles.png``.
 """
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 
 from feloop.causes import force_scale_power
 from feloop.diagnosis import unconverged_fits
+from feloop.given_model import data_block, fit_block
 from feloop.levels import BASE_PARAMETERS, level_entries
 from feloop.tie import tie_statement
 from feloop.update_text import LABEL, format_text, markdown
@@ -208,7 +210,9 @@ def write_update(r: dict, out) -> list:
              "model": s["model"], "unexplained": s["unexplained"],
              "fit_test": s["fit_test"], "parameters": s["parameters"], "joint": s["derived"],
              "fit_levels": s["fit_levels"], "noise": s["noise"],
-             "base_parameters": list(BASE_PARAMETERS)}
+             "base_parameters": list(BASE_PARAMETERS),
+             "fit": fit_block(r["fit"], r["parameters"]),
+             "data": data_block(data, r["settings"].mode_label, r["settings"].force_scale)}
     files = {"updated_model.json": model, "update.json": s}
     for name, obj in files.items():
         (out / name).write_text(json.dumps(to_jsonable(obj), indent=2) + "\n", encoding="utf-8")

@@ -83,3 +83,102 @@ def test_a_model_of_another_case_or_with_a_cause_is_one_line(updated, tmp_path, 
         assert main(["modes", "--case", str(case), "--model", str(bad)]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and words in err
+
+
+# --- uncertainty --model and loop --model: the given model in the FE-levels
+# parametrization (feloop.given_model). Truth: the update's own numbers (update.json),
+# since the given model is drawn around / simulated exactly as update left it.
+
+def _one_line_exit_2(capsys, argv, words):
+    assert main(argv) == 2, argv
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err, err
+
+
+def test_uncertainty_draws_around_the_given_model(updated, tmp_path, capsys):
+    """The nominal is the model's values (1e-12) and its prediction the update's at every
+    level (frequency 1e-9, zeta 1e-6 relative: the same FE-levels model from a cold
+    start); the drawn sd are the update's standard errors (1e-9); no model choice runs."""
+    case, model, s = updated
+    r = _json(capsys, ["uncertainty", "--case", str(case), "--model", str(model),
+                       "--samples", "4", "--out", str(tmp_path / "mc"), "--json",
+                       "--no-progress"])
+    m, dist = r["model"], r["distribution"]
+    assert m["given"] == str(model) and m["candidate"] == s["model"]
+    assert m["fit_levels"] == s["fit_levels"]
+    for name, v in s["fit"]["values"].items():
+        assert m["values"][name] == pytest.approx(v, rel=1e-12, abs=1e-15), name
+    for name, sd in zip(dist["parameters"], dist["sd"]):
+        assert sd == pytest.approx(s["fit"]["std_error"][name], rel=1e-9), name
+    assert dist["mean"] == pytest.approx([s["fit"]["values"][n] for n in dist["parameters"]],
+                                         rel=1e-12)
+    for row, up in zip(r["levels"], s["levels"]):
+        assert row["nominal_frequency_hz"] == pytest.approx(up["model"]["frequency_hz"],
+                                                            rel=1e-9)
+        assert row["nominal_zeta"] == pytest.approx(up["model"]["zeta"], rel=1e-6)
+    assert r["n_failed"] == 0 and "given model" in r["timing_s"]
+
+
+def test_uncertainty_refuses_a_model_of_another_case_data_or_levels(updated, tmp_path,
+                                                                    capsys):
+    case, model, _ = updated
+    doc = json.loads(model.read_text())
+    base = ["uncertainty", "--case", str(case), "--samples", "2", "--out",
+            str(tmp_path / "mc"), "--no-progress", "--model"]
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps({**doc, "case": "brb"}))
+    _one_line_exit_2(capsys, base + [str(other)], "the update of case 'brb'")
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps({k: v for k, v in doc.items() if k not in ("fit", "data")}))
+    _one_line_exit_2(capsys, base + [str(old)], "older iwanfe update")
+    _one_line_exit_2(capsys, base + [str(model), "--fit-levels", "1-6"],
+                     "fitted to levels [1, 2, 3, 4, 5, 6, 7], not")
+    csv = case.parent / "bolted-lap-cantilever-levels.csv"
+    lines = csv.read_text().splitlines()
+    cells = lines[1].split(",")
+    cells[2] = repr(float(cells[2]) * (1 + 1e-6))       # one omega^2 moved by 1e-6
+    moved = tmp_path / "moved.csv"
+    moved.write_text("\n".join([lines[0], ",".join(cells), *lines[2:]]) + "\n")
+    _one_line_exit_2(capsys, base + [str(model), str(moved)], "fitted to other data")
+
+
+def test_loop_reports_what_the_given_model_gets_wrong(updated, tmp_path, capsys):
+    """loop --model: the loop as without it, and the given model's errors at every level
+    (its prediction the update's, 1e-9 / 1e-6 relative; its rms over its fit levels the
+    update's sqrt(chi2 / n), 1e-6), beside the loop's own model (the same fit here:
+    the same rms to 1e-6)."""
+    case, model, s = updated
+    out = tmp_path / "loop"
+    loop = _json(capsys, ["loop", "--case", str(case), "--model", str(model), "--out",
+                          str(out), "--json", "--no-progress"])
+    g = loop["given_model"]
+    assert g["path"] == str(model) and g["same_fit_levels"]
+    for row, up in zip(g["errors"]["levels"], s["levels"]):
+        assert row["frequency_hz"] == pytest.approx(up["model"]["frequency_hz"], rel=1e-9)
+        assert row["zeta"] == pytest.approx(up["model"]["zeta"], rel=1e-6)
+        assert row["fitted"] == (row["level"] in s["fit_levels"])
+    chi2, n = s["fit"]["chi2"], s["fit"]["n_residuals"]
+    assert g["errors"]["rms_fitted_sd"] == pytest.approx((chi2 / n) ** 0.5, rel=1e-6)
+    assert g["loop_errors"]["rms_fitted_sd"] == pytest.approx(g["errors"]["rms_fitted_sd"],
+                                                              rel=1e-6)
+    assert "## The given model" in (out / "report.md").read_text()
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({**json.loads(model.read_text()), "case": "brb"}))
+    _one_line_exit_2(capsys, ["loop", "--case", str(case), "--model", str(bad), "--out",
+                              str(tmp_path / "l2"), "--no-progress"], "the update of case")
+
+
+def test_an_unbounded_side_survives_the_json(updated, tmp_path):
+    """JSON has no inf: an unbounded side (the air drag's C_D >= 0) is written null and
+    read back as inf, the rest of the fit block exactly."""
+    from feloop.given_model import read_given
+
+    case, model, s = updated
+    doc = json.loads(model.read_text())
+    doc["fit"]["bounds"]["ln_dc1"] = [None, None]
+    path = tmp_path / "unbounded.json"
+    path.write_text(json.dumps(doc))
+    g = read_given(path, doc["case"])
+    assert g.bounds["ln_dc1"].lower == -np.inf and g.bounds["ln_dc1"].upper == np.inf
+    assert g.bounds["chi"].lower == doc["fit"]["bounds"]["chi"][0]
+    assert g.fit.values == s["fit"]["values"] and g.fit.chi2 == s["fit"]["chi2"]

@@ -1,7 +1,8 @@
 """``iwanfe loop``: the main job, the whole loop on one page (``make run``).
 
 Parses, asks the case for its ``update`` capability, calls
-:func:`cases.loop_report.run_loop`, prints the short summary
+:func:`cases.loop_report.run_loop` (``--model``: a model of ``update`` checked at every
+level beside the loop's update), prints the short summary
 (:func:`cases.loop_report.format_summary`) or the JSON document.
 """
 from __future__ import annotations
@@ -11,6 +12,7 @@ from pathlib import Path
 
 from cli import validate
 from cli.executor_options import add_executor_arguments, executor_from_args
+from cli.model_options import add_model_argument
 from runs.jsonio import print_json
 
 NAME = "loop"
@@ -28,7 +30,8 @@ def register(subparsers) -> None:
             "extensions (iwanfe diagnose --case), and the page reports what the updated "
             "base model gets wrong (with numbers), the cause named, the extended model and "
             "its gain at the levels no fit saw. Writes report.md (one page, with its "
-            "figure), loop.json and the update's files in DIR/update."),
+            "figure), loop.json and the update's files in DIR/update. With --model, the "
+            "page also says what that updated model gets wrong at every level."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--case", default=DEFAULT_CASE, metavar="NAME|FILE",
                         help="a case with measured levels and FE model updating")
@@ -36,6 +39,12 @@ def register(subparsers) -> None:
                         help="output folder (profiles are kept: a rerun resumes)")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_model_argument(parser, help=(
+        "also check this model of iwanfe update on the case (same data and mode; any "
+        "fit levels, any candidate) at every level beside the loop's own update: its "
+        "predictions against the measured values in noise sd, rms at its fit levels and "
+        "at the others (the loop's fits start from the data, not from a nominal joint, "
+        "so the model does not change them); a model of another case or data: exit 2"))
     add_executor_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -48,7 +57,7 @@ def run(args) -> int:
     case.require("update")
     out = validate.output_dir(args.out, "--out")
     s = run_loop(case, out, executor=executor_from_args(args),
-                 progress=not args.no_progress)
+                 progress=not args.no_progress, model=args.model)
     if args.json:
         print_json(s)
     else:

@@ -10,7 +10,10 @@ filter per sample, with the estimator's closed-form interval beside,
 (a case file with iwan4 joints) runs :mod:`feloop.uncertainty` instead: the
 parameters of the model ``update`` selects for the same levels drawn from its fit (the
 nominal is ``update``'s model; unphysical samples counted failed), each simulated by
-exact describing function at phase resonance. Every finished sample is stored under
+exact describing function at phase resonance. With ``--model DIR/updated_model.json``
+(any case with an FE-levels model, the double beam's case file too) the samples are
+drawn around that model of ``update`` (its values and its fit's covariance,
+:mod:`feloop.given_model`) instead. Every finished sample is stored under
 ``--out``; a rerun computes only the missing ones.
 """
 from __future__ import annotations
@@ -23,6 +26,7 @@ from pathlib import Path
 
 from cli import validate
 from cli.executor_options import add_executor_arguments, executor_from_args, int_at_least
+from cli.model_options import add_model_argument
 from runs.jsonio import print_json
 
 NAME = "uncertainty"
@@ -49,7 +53,8 @@ def register(subparsers) -> None:
             "model 'update' selects for the same levels, drawn from that fit (its nominal "
             "is update's model; samples that fail or are not physical are counted failed "
             "with the reason), each simulated by exact describing function at phase "
-            "resonance (its FE-levels model, ms per sample). "
+            "resonance (its FE-levels model, ms per sample); with --model, drawn around "
+            "that updated model and its fit's covariance instead (no model choice run). "
             "Writes uncertainty.json (and for the double beam uncertainty.png) under --out "
             "and stores every "
             "finished sample there: a rerun computes only the missing ones, and more "
@@ -93,6 +98,14 @@ def register(subparsers) -> None:
                      help="line spacing, Hz (default 0.5)")
     sim.add_argument("--sliders-per-octave", type=int, default=None,
                      help="Jenkins sliders per octave of slip limit (default 8)")
+    add_model_argument(parser, help=(
+        "draw the samples around this model of iwanfe update on the case (its fitted "
+        "values the nominal, its fit's covariance, misfit scale, dof and bounds the "
+        "distribution) instead of re-running update's model choice; its mode, fit levels "
+        "and force scale are the defaults, and a model of another case, data, mode, fit "
+        "levels or force scale is refused (exit 2). Any candidate (the base model or a "
+        "cause); the per-sample route is the case's FE-levels model (the double beam's "
+        "case file)"))
     add_executor_arguments(parser)     # --workers/--scheduler/--executor: where samples run
     parser.set_defaults(func=run)
 
@@ -237,8 +250,8 @@ def write_outputs(rep, out: Path) -> list[Path]:
 def run(args) -> int:
     from cases.registry import resolve_case
 
-    case = resolve_case(args.case)
-    if "uncertainty" not in case.capabilities:
+    case = resolve_case(args.case)     # --model: the nominal, not a changed case file
+    if "uncertainty" not in case.capabilities or args.model is not None:
         from cli.commands.uncertainty_levels import run_levels
 
         return run_levels(args, case)

@@ -1,7 +1,8 @@
 """``iwanfe uncertainty --case FILE``: the Monte Carlo of a case's FE-levels model
-over ``update``'s selected model (:mod:`feloop.uncertainty`: exact describing
-function at phase resonance per sample), for a case without its own ``uncertainty``
-study; options, text and files."""
+over ``update``'s selected model, or over a given one (``--model``,
+:mod:`feloop.given_model`) (:mod:`feloop.uncertainty`: exact describing function at
+phase resonance per sample), for a case without its own ``uncertainty`` study or with
+``--model``; options, text and files."""
 from __future__ import annotations
 
 import json
@@ -27,9 +28,10 @@ def text(r: dict) -> str:
     held = [n for n, b in m["at_bound"].items() if b]
     sd = dict(zip(dist["parameters"], dist["sd"]))
     kept = dist["kept_fraction"]
+    who = "the given" if m.get("given") else "update's selected"
     lines = [f"iwanfe uncertainty {r['source']}  case {r['case']}  mode {r['mode']}  "
              f"fit levels {m['fit_levels']}",
-             f"  nominal: update's selected model '{m['candidate']}' (cause "
+             f"  nominal: {who} model '{m['candidate']}' (cause "
              f"{'unexplained' if m['unexplained'] else m['cause']}) with its fitted "
              f"parameters ({m['rule']})",
              f"  it misses its fit levels by {m['rms_misfit_sd']:.3g} noise sd rms "
@@ -78,16 +80,18 @@ def run_levels(args, case) -> int:
                              "resonance")
     if not 0 < args.confidence < 1:
         raise ValueError(f"--confidence {args.confidence:g}: must lie in (0, 1)")
-    force_scale = 1.0 if args.force_scale is None else validate.positive(
+    force_scale = None if args.force_scale is None else validate.positive(
         args.force_scale, "--force-scale")
     data = None if args.file is None else str(validate.input_file(args.file))
     out = validate.output_dir(args.out, "--out")
     progress = not args.no_progress
     if progress:
-        print(f"iwanfe uncertainty: the model choice of update, then {args.samples} samples "
+        first = "the model choice of update" if args.model is None else args.model
+        print(f"iwanfe uncertainty: {first}, then {args.samples} samples "
               f"+ nominal, store under {out}", file=sys.stderr)
     r = uncertainty(data_path=data, mode_label=args.mode, fit_levels=args.fit_levels,
-                    force_scale=force_scale, n_samples=args.samples, seed=args.seed,
+                    force_scale=force_scale, model=args.model, n_samples=args.samples,
+                    seed=args.seed,
                     confidence=args.confidence, distribution=args.distribution, out=out,
                     executor=executor_from_args(args), progress=progress)
     Path(out).mkdir(parents=True, exist_ok=True)
