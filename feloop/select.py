@@ -170,18 +170,27 @@ SAME_OPTIMUM = 1e-3
 def fit_base(problem: UpdateProblem, starts, free=BASE_PARAMETERS, only=None) -> tuple:
     """The best fit from ``starts`` (those at the indices ``only``, default all; all of
     them together, each from a cold start: :func:`inverse.fe_selection.fit_together`).
-    Returns the fit, every start with the fitted ones first, best first (the
+    The best: the lowest chi2 of the converged fits at the lowest optimum
+    (:data:`SAME_OPTIMUM`), else the lowest. Returns the fit, every start with the
+    fitted ones first, best first (the
     cross-validation folds refit from the first, the others where a fold fails:
     :func:`inverse.fe_selection.cross_validate`), and the indices of the starts that
     reached distinct optima (:data:`SAME_OPTIMUM`; every failed one kept), for a fit
-    with more levels (:func:`fe_select`, ``earlier``). When every start of ``only``
-    fails, every start is fitted."""
+    with more levels (:func:`fe_select`, ``earlier``). When the best fit from the
+    starts of ``only`` failed or did not converge, every start is fitted."""
     starts = list(starts)
     idx = list(range(len(starts)) if only is None else only)
     fits, _ = fit_together(problem, [dict(free=free, start=starts[i], tol=FIT_TOL)
                                      for i in idx])
-    order = sorted(range(len(fits)), key=lambda n: (not fits[n].success, fits[n].chi2, n))
-    if only is not None and not fits[order[0]].success:
+    low = min((f.chi2 for f in fits if f.success), default=math.inf)
+
+    def rank(n):         # a converged fit at the lowest optimum before an unconverged one
+        f = fits[n]
+        near = f.success and f.converged and f.chi2 <= low + SAME_OPTIMUM * (1.0 + low)
+        return not f.success, not near, f.chi2, n
+
+    order = sorted(range(len(fits)), key=rank)
+    if only is not None and not (fits[order[0]].success and fits[order[0]].converged):
         return fit_base(problem, starts, free)     # every start, as with no ``only``
     kept = []
     for n in order:
