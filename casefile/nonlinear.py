@@ -66,7 +66,7 @@ def _joint_source(cf) -> str:
     """Where the joint parameters come from: the file, or the update that fitted them
     (:mod:`feloop.updated_model` marks them ``fitted``)."""
     fitted = {src for key, (kind, src) in cf.kinds.items()
-              if key.startswith("interface.") and key.endswith(".chi") and kind == "fitted"}
+              if key.startswith("interface.") and key.endswith(".fs") and kind == "fitted"}
     return f"fitted {sorted(fitted)[0]}" if fitted else f"given in {cf.path.name}"
 
 
@@ -75,9 +75,8 @@ def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
     law = file_law(cf)
     missing = missing_joint_parameters(cf)
     if missing:
-        why = "fitted by update" if law == "iwan4" else f"update fits law iwan4, not {law}"
-        raise InputError(f"{cf.path}: {', '.join(missing)} not given ({why}): a "
-                         f"nonlinear model needs them in the file")
+        raise InputError(f"{cf.path}: {', '.join(missing)} not given (fitted by update: "
+                         f"--model DIR/updated_model.json): a nonlinear model needs them")
     if model.joint_stiffness.size == 0:
         raise InputError(f"{cf.path}: no joint interface (tangential = 'joint'): "
                          "no nonlinear model")

@@ -6,7 +6,8 @@ range and its source; outside it the report says ``implausible`` with both numbe
 diagnosis names). The checks (every one computed from the file, no constant tuned to
 data):
 
-* ``phi_max`` (slip onset, m) at least :data:`PHI_MAX_FLOOR` (1 nm: below the
+* the slip scale (m: ``phi_max`` of an Iwan joint, ``fs/kt`` of a Jenkins slider, ``z_u``
+  of a Bouc-Wen element; ``phi_max_m`` or ``slip_scale_m``) at least :data:`PHI_MAX_FLOOR` (1 nm: below the
   roughness of any machined contact, Ra >= 0.1 um, a joint cannot stick and slip) and at
   most :data:`PHI_MAX_SHARE` of the shortest joint interface's length (a joint that
   slips by a tenth of its overlap before it slides is no longer a lap);
@@ -52,7 +53,8 @@ def _shear_stiffness(cf, itf) -> float:
 
 
 def joint_plausibility(cf, joint: dict, drag_cd: float | None = None) -> list[dict]:
-    """Checks of ``joint`` (``phi_max`` m, ``K_T`` N/m, ``F_S`` N, ``beta``: the joint of
+    """Checks of ``joint`` (``slip_scale`` or ``phi_max`` m, ``K_T`` N/m, ``F_S`` N,
+    ``beta``, ``law``: the joint of
     the update's prediction, :class:`feloop.levels.LevelPrediction`) and of a fitted air
     drag coefficient ``drag_cd`` (module docstring) against the file
     ``cf``: one dict per check with ``parameter``, ``value``, ``kind`` (fitted, assumed),
@@ -71,7 +73,10 @@ def joint_plausibility(cf, joint: dict, drag_cd: float | None = None) -> list[di
                     "high": high, "source": source,
                     "verdict": "plausible" if inside else "implausible"})
 
-    check("phi_max_m", float(joint["phi_max"]), "fitted", PHI_MAX_FLOOR, PHI_MAX_SHARE * shortest,
+    law = joint.get("law", "iwan4")
+    check("phi_max_m" if law == "iwan4" else "slip_scale_m",
+          float(joint.get("slip_scale", joint.get("phi_max"))), "fitted", PHI_MAX_FLOOR,
+          PHI_MAX_SHARE * shortest,
           f"1 nm (below any machined roughness) to {PHI_MAX_SHARE:g} x the shortest joint "
           f"interface ({shortest:g} m)")
     check("K_T_N_per_m", float(joint["K_T"]), "assumed unless profiled",

@@ -5,7 +5,8 @@
 keys refused, ``x_`` keys ignored), checks the geometry rules of the spec (ranges inside
 beams, stacked interfaces) and records the *kind* of every parameter: ``given`` (in the
 file), ``default`` (with its source), ``fitted`` (a joint parameter left out: fitted by
-``iwanfe update`` for law ``iwan4``); ``calibrated`` is set by :mod:`casefile.calibrate`.
+``iwanfe update``, every law; a Bouc-Wen ``shape`` left out is assumed there);
+``calibrated`` is set by :mod:`casefile.calibrate`.
 A joint interface names its law and that law's keys (:mod:`casefile.laws`). SI units.
 
 Beyond the spec: ``[damping] zeta`` (the stuck structure's viscous modal damping ratio,
@@ -265,11 +266,10 @@ class _Reader:
         kt = t.number("kt", lo=0, lo_open=True)
         params = {k.name: k.read(t) for k in LAWS[law]}
         self.given(t, "kt", "joints_at", "joint_elements")
-        fitted = ("fitted", "by iwanfe update") if law == "iwan4" else (
-            "fitted", f"left to be fitted: iwanfe update fits law iwan4 only, so backbone "
-                      f"and ringdown need it given")
-        for k in own:
-            self.kinds[f"{t.label}.{k}"] = ("given", "") if t.has(k) else fitted
+        for k in own:      # a Bouc-Wen shape left out: update assumes it (joint_forms)
+            left = ("assumed", "0.5 by iwanfe update (fitted nowhere)") \
+                if (law, k) == ("bouc-wen", "shape") else ("fitted", "by iwanfe update")
+            self.kinds[f"{t.label}.{k}"] = ("given", "") if t.has(k) else left
         return law, kt, params
 
     def point(self, t: Table, by_name: dict, kind: str) -> PointMass:

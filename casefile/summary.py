@@ -57,6 +57,7 @@ def case_summary(cf, built, calibration, n_modes: int = 6) -> dict:
                       "joint_energy_share": model.glue_slip_participation(shapes[:, i])})
     params = [{"parameter": a, "value": parameter_value(cf, a), "kind": k, "source": s}
               for a, (k, s) in sorted(cf.kinds.items())]
+    left = {k: cf.kinds.get(k, ("fitted",))[0] for k in missing_joint_parameters(cf)}
     return {
         "case": cf.name, "description": cf.description, "file": str(cf.path),
         "mass_kg": model.mass, "n_nodes": built.n_nodes, "n_free_dofs": model.n_free,
@@ -64,7 +65,9 @@ def case_summary(cf, built, calibration, n_modes: int = 6) -> dict:
         "modes": modes, "joints": built.joint_table,
         "joint_stiffness_total": float(model.joint_stiffness.sum()),
         "parameters": params, "calibration": calibration,
-        "joint_laws": joint_laws(cf), "fitted_by_update": missing_joint_parameters(cf),
+        "joint_laws": joint_laws(cf),
+        "fitted_by_update": [k for k, kind in left.items() if kind == "fitted"],
+        "assumed_by_update": [k for k, kind in left.items() if kind == "assumed"],
     }
 
 

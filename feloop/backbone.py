@@ -70,6 +70,10 @@ def predict_from_backbone(data, est, levels, force_scale: float = 1.0, case_name
     """
     d = data.for_mode(est.mode)
     fe = levels(d, force_scale=float(force_scale))
+    if fe.form.law != "iwan4":
+        raise InputError(f"--backbone predicts from the paper's estimator, a four-parameter "
+                         f"Iwan joint; case {case_name!r} has {fe.form.law} joints: "
+                         f"iwanfe update fits them")
     p = estimated_joint(est.chi, est.kappa1_B, d.omega2[0], d.zeta[0])
     j, red, scale, _, _ = fe.setup(p)
     lin, a = j["linear"], float(scale[0])      # the stiffness scale of f0_hz

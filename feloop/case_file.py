@@ -3,8 +3,9 @@ CaseLevels`), ``update`` (:func:`feloop.update.run_update` on it, the one judge
 of :func:`feloop.select.fe_select` choosing the model), the assumed properties
 ``update --assumptions`` changes (:func:`assumption_variants`) and ``uncertainty``
 (:func:`feloop.uncertainty.run_fe_uncertainty` on it), for a file whose joint
-interfaces all have law ``iwan4`` and a ``kt``, with a ``[drive]`` and a ``[measured]``
-table.
+interfaces have one law (``iwan4``, ``jenkins`` or ``bouc-wen``: :mod:`feloop.joint_forms`)
+and a ``kt``, with a ``[drive]`` and a ``[measured]`` table (``uncertainty`` takes
+``iwan4`` only).
 
 Defaults a command may override: the data are the file's table, the mode label the
 file's ``[measured] mode`` when the table has it (else the table's only mode label),
@@ -30,30 +31,30 @@ from ident.errors import InputError
 __all__ = ["qualifies", "refusal", "levels_builder", "assumption_variants",
            "update_builder", "fitted_plausibility", "uncertainty_builder"]
 
-#: what a case file of a law other than ``iwan4`` runs (the FE loop fits Iwan joints)
-OTHER_LAW_COMMANDS = ("case check, modes, convergence, render, export, backbone, ringdown "
-                      "and the virtual tests (cases.virtual_test, cases.stepped_sine_test)")
+#: the commands of the FE loop that take the four-parameter Iwan joint only (the
+#: Monte Carlo draws in chi, the backbone prediction is the paper's estimator's)
+IWAN_ONLY = "uncertainty and --backbone"
 
 
 def qualifies(cf) -> bool:
-    """The file has what the FE loop needs (module docstring)."""
+    """The file has what the FE loop needs (module docstring): joint interfaces of one
+    law (:mod:`feloop.joint_forms`), each with a ``kt``, a drive and measured data."""
     joints = [i for i in cf.interfaces if i.tangential == "joint"]
-    return bool(joints) and all(i.law == "iwan4" and i.kt for i in joints) \
+    return bool(joints) and all(i.kt for i in joints) and len({i.law for i in joints}) == 1 \
         and cf.drive is not None and cf.measured is not None and bool(cf.measured.files)
 
 
 def refusal(cf) -> str | None:
-    """Why the FE loop (``update``, ``diagnose --case``, ``loop``, ``uncertainty``,
-    ``--backbone``) refuses the file: one line naming its first joint interface of a law
-    other than ``iwan4`` and the commands that take that law; None when all are iwan4."""
+    """Why :data:`IWAN_ONLY` refuse the file: one line naming its first joint interface
+    of a law other than ``iwan4`` (``update``, ``diagnose --case`` and ``loop`` take
+    every law); None when all are iwan4."""
     other = [(k, i.law) for k, i in enumerate(cf.interfaces)
              if i.tangential == "joint" and i.law != "iwan4"]
     if not other:
         return None
     k, law = other[0]
-    return (f"{cf.path}: [interface.{k}] law = {law!r}: update, diagnose --case, loop, "
-            f"uncertainty and --backbone fit Iwan joints (law 'iwan4') only; a {law} file "
-            f"runs {OTHER_LAW_COMMANDS}")
+    return (f"{cf.path}: [interface.{k}] law = {law!r}: {IWAN_ONLY} take Iwan joints "
+            f"(law 'iwan4') only; update, diagnose --case and loop fit {law} joints")
 
 
 @dataclass(frozen=True)
@@ -131,22 +132,28 @@ def _defaults(cf, data_path=None, mode=None) -> dict:
 
 def _nominal_joint_note(cf) -> str:
     """What the file says of its joints beside what update fits: the nominal joint of
-    modes and backbone where chi, fs and beta are given, 'left to be fitted' where one is
+    modes and backbone where the law's keys are given, 'left to be fitted' where one is
     not (the case-file spec allows either)."""
-    parts = []
+    from casefile.laws import law_keys
+    from feloop.case_levels import form_of
+
+    parts, units = [], {"fs": " N"}
     for k, i in enumerate(cf.interfaces):
         if i.tangential != "joint":
             continue
-        given = {"chi": i.chi, "fs": i.fs, "beta": i.beta}
+        given = {n: getattr(i, n) for n in law_keys(i.law)}
         missing = [name for name, v in given.items() if v is None]
         if missing:
             parts.append(f"[interface.{k}] {', '.join(missing)} left to be fitted")
         else:
-            parts.append(f"[interface.{k}] chi = {i.chi:g}, fs = {i.fs:g} N, beta = "
-                         f"{i.beta:g} (nominal joint of modes and backbone)")
-    return (f"the file's joints: {'; '.join(parts)}; update fits chi and the joint strength "
-            f"to the measured levels (beta: the ln(phi_max/a_ref) row below; "
-            f"docs/case-file-loop.md)")
+            parts.append(f"[interface.{k}] " + ", ".join(
+                f"{n} = {v:g}{units.get(n, '')}" for n, v in given.items())
+                + " (nominal joint of modes and backbone)")
+    form = form_of(cf)
+    fitted = ("chi and the joint strength to the measured levels (beta: the "
+              "ln(phi_max/a_ref) row below" if form.law == "iwan4" else
+              f"{', '.join(form.names)} to the measured levels (law {form.law}")
+    return f"the file's joints: {'; '.join(parts)}; update fits {fitted}; docs/case-file-loop.md)"
 
 
 def update_builder(cf):

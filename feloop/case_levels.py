@@ -1,9 +1,10 @@
-"""The FE-levels model of any case file with four-parameter Iwan joints: omega^2 and
-zeta of the measured mode at every force level, as a function of the fit parameters.
+"""The FE-levels model of any case file: omega^2 and zeta of the measured mode at every
+force level, as a function of the fit parameters.
 
-:class:`CaseLevels` is a :class:`feloop.levels.FELevels` (the
-parameters ``chi``, ``ln_dc1`` = ``|kappa1| B~`` of the joints at level 1 (paper eq.
-30-32, 37), ``zeta_v``, ``f0_hz``, optional ``log10_kt``, ``ln_phimax``; the
+:class:`CaseLevels` is a :class:`feloop.levels.FELevels` (the joint parameters of the
+file's law, :mod:`feloop.joint_forms`: for Iwan joints ``chi``, ``ln_dc1`` =
+``|kappa1| B~`` of the joints at level 1 (paper eq. 30-32, 37), optional ``ln_phimax``;
+``zeta_v``, ``f0_hz``, optional ``log10_kt``; the
 first-harmonic balance with the exact describing function at phase resonance,
 :func:`fe.hb_resonance.resonance_levels`) with the structure taken from a case file
 instead of the double beam's Python model (reduced by :func:`linear_part`, the
@@ -15,8 +16,8 @@ double beam's too), so the one judge
   (the shares and the file's ``[calibrate]`` are kept: each K_T is calibrated again).
   The default is the file's total ``kt`` (assumed, or calibrated by the file).
 * Every joint element carries ``w_j R~`` and ``w_j K_T`` with ``w_j = k_j / K_T`` (one
-  ``phi_max``, Segalman 2005 eq. 12): the file's ``chi``, ``fs``, ``beta`` are the nominal
-  model; ``update`` fits ``chi`` and the joint strength in the variable the data
+  ``phi_max``, Segalman 2005 eq. 12; another law its slip force ``w_j F_S``): the file's
+  joint keys are the nominal model; ``update`` fits the joint in the variables the data
   determine.
 * Air drag (``quadratic-damping``): ``lambda3 = int b |phi_w|^3 dx`` over the
   projected area (the strip widths folded in, so ``width = 1``); where strips are
@@ -35,15 +36,28 @@ import scipy.sparse as sp
 from casefile.build import build_model
 from casefile.calibrate import calibrate
 from fe.reduction import JointedSystem, reduced_basis
+from casefile.nonlinear import file_law
+from feloop.joint_forms import FORMS, BoucWenForm, JointForm
 from feloop.levels import FELevels, LinearPart, abscissa_of
 from inverse.fe_reference import joint_slip_at_resonance, pick_fe_mode
 
-__all__ = ["total_kt", "linear_part", "CaseLevels"]
+__all__ = ["total_kt", "form_of", "linear_part", "CaseLevels"]
 
 
 def total_kt(cf) -> float:
     """Total stuck stiffness (N/m) of the joint interfaces of case file ``cf``."""
     return float(sum(i.kt for i in cf.interfaces if i.tangential == "joint"))
+
+
+def form_of(cf) -> JointForm:
+    """The joint form (:mod:`feloop.joint_forms`) of case file ``cf``'s one law
+    (:func:`casefile.nonlinear.file_law`); a Bouc-Wen file's ``shape`` given, or assumed
+    when the file leaves it (or its interfaces differ in it)."""
+    law = file_law(cf)
+    if law == "bouc-wen":
+        shapes = {i.shape for i in cf.interfaces if i.tangential == "joint"}
+        return BoucWenForm(shapes.pop() if len(shapes) == 1 else None)
+    return FORMS[law]()
 
 
 def linear_part(levels: FELevels, model, K_T: float, lambda3, width: float,
@@ -113,6 +127,7 @@ class CaseLevels(FELevels):
         if total_kt(cf) <= 0.0:
             raise ValueError(f"{cf.path}: no joint interface with kt > 0")
         self.cf = cf
+        self.form = form_of(cf)
         self.default_kt = total_kt(cf)
         self.label = f"case {cf.name}"
 

@@ -52,10 +52,9 @@ import numpy as np
 
 from fe.hb_batch import resonance_batch
 from fe.hb_response import response_levels
-from inverse.iwan_modal import r_tilde
 from inverse.update import SIMULATION_FAILURES
 from inverse.random_amplitude import rayleigh_nodes
-from joints.iwan import IwanParameters
+from feloop.joint_forms import IwanForm, JointForm, phi_max_of
 
 __all__ = ["BASE_PARAMETERS", "phi_max_of", "LinearPart", "LevelPrediction", "FELevels",
            "Simulator", "level_entries", "abscissa_of", "rayleigh_expectation"]
@@ -71,20 +70,6 @@ ABSCISSAE = ("force", "response", "random")
 RAYLEIGH_NODES = 8
 #: Nodes lighter than this are dropped (the two beyond 4.9 RMS: weight 3.4e-6 together).
 RAYLEIGH_MIN_WEIGHT = 1e-6
-
-
-def phi_max_of(K_T, R, chi, beta) -> float:
-    """Eq. (1): ``(K_T (chi+1) / ((1+beta) R))^(1/(chi+1))`` (m; Segalman 2005, eq. 12);
-    ValueError (one line) if that is not a positive normal double."""
-    try:
-        pm = (K_T * (chi + 1.0) / ((1.0 + beta) * R)) ** (1.0 / (chi + 1.0))
-    except (OverflowError, ZeroDivisionError):
-        pm = math.inf
-    if not (math.isfinite(pm) and pm >= 2.3e-308):
-        raise ValueError(f"the glue joint's phi_max = (K_T (chi+1)/((1+beta) R))^(1/(chi+1)) "
-                         f"with K_T = {K_T:g} N/m, R = {R:g}, chi = {chi:g}, beta = {beta:g} is "
-                         f"outside double precision (check --R, --chi, --force-scale)")
-    return pm
 
 
 @dataclass
@@ -164,6 +149,8 @@ class FELevels:
     default_kt: float = math.nan
     #: what the model is, in reports
     label = "FE model"
+    #: how the joints' law enters (:mod:`feloop.joint_forms`; set by the case)
+    form: JointForm = IwanForm()
 
     def __init__(self, excitation, run_order, omega2_1: float, zeta_1: float,
                  force_scale: float = 1.0, n_modes: int = N_MODES, abscissa: str = "force",
@@ -219,35 +206,23 @@ class FELevels:
         """How the structure of ``lin`` was calibrated, in reports."""
         return "structure as the case file gives or calibrates it"
 
+    @property
+    def base_parameters(self) -> tuple:
+        """The base model's parameters, in the order the fits use: the form's joint
+        parameters, ``zeta_v``, ``f0_hz`` (:data:`BASE_PARAMETERS` for Iwan joints)."""
+        return self.form.names + BASE_PARAMETERS[2:]
+
     def joint(self, p: dict) -> dict:
-        """The joints of parameter set ``p``: ``chi, R, K_T, beta, phi_max, F_S`` and the
-        per-node :class:`joints.iwan.IwanParameters` (``params``, the same objects for the
-        same joint parameters: the last 256 kept)."""
+        """The joints of parameter set ``p`` (:meth:`feloop.joint_forms.JointForm.joint`:
+        ``K_T, F_S, slip_scale``, the law's own figures, ``chi, R, beta, phi_max`` for
+        Iwan joints; ``params``, the same objects for the same joint parameters: the last
+        256 kept) and ``linear``, the model they sit on."""
         lin = self.linear(10.0 ** float(p.get("log10_kt", math.log10(self.default_kt))))
-        key = (round(math.log10(lin.K_T), 9), float(p["chi"]), float(p["ln_dc1"]),
-               float(p["ln_phimax"]) if "ln_phimax" in p else "absent")
+        key = (round(math.log10(lin.K_T), 9),) + self.form.key(p)
         if key not in self._joints:
             self._joints = self._joints if len(self._joints) < 256 else {}
-            self._joints[key] = self._joint(p, lin)
+            self._joints[key] = {**self.form.joint(p, lin), "linear": lin}
         return dict(self._joints[key])
-
-    def _joint(self, p: dict, lin: LinearPart) -> dict:
-        K_T = lin.K_T                   # the model's own (log10 K_T rounded to 1e-9)
-        chi = float(p["chi"])
-        if not -1.0 < chi < 0.0:
-            raise ValueError(f"chi must lie in (-1, 0), got {chi:.4g}")
-        R = r_tilde(math.exp(float(p["ln_dc1"])), chi, lin.B(chi))
-        pm = phi_max_of(K_T, R, chi, 0.0)            # beta = 0: the largest phi_max
-        beta = 0.0
-        if "ln_phimax" in p:                           # phi_max / a_ref given: beta >= 0
-            target = math.exp(float(p["ln_phimax"])) * lin.a_ref
-            if target < pm:
-                beta = (pm / target) ** (chi + 1.0) - 1.0
-                pm = target
-        params = [IwanParameters.from_density(R * w, chi, pm, K_T * w * beta / (1.0 + beta))
-                  for w in lin.shares]
-        return {"chi": chi, "R": R, "K_T": K_T, "beta": beta, "phi_max": pm,
-                "F_S": float(sum(q.F_S for q in params)), "params": params, "linear": lin}
 
     def setup(self, p: dict, extension=None):
         """The first-harmonic balance inputs of parameter set ``p``: ``(joint, red,
@@ -296,11 +271,36 @@ class FELevels:
                                       guesses)
             else:
                 res = [self._response(s, g) for (_, s), g in zip(items, guesses)]
-            for (i, s), r in zip(items, res):
+            for n, ((i, s), r) in enumerate(zip(items, res)):
+                if isinstance(r, Exception) and key[1] is not None and guesses[n] is None \
+                        and self.abscissa == "force":
+                    r = self._from_base(ps[i], s, warm[i].get((key[0], None)), r)
                 failed = isinstance(r, Exception)
                 out[i] = r if failed else self._prediction(ps[i], s[0], r)
                 new[i] = warm[i] if failed else {**warm[i], key: r}
         return out, new
+
+    def _from_base(self, p: dict, s, base, error):
+        """A cause's balance (set-up ``s`` of parameter set ``p``) that failed from the
+        linear guess, again from the base model's solution of the same joints (``base``:
+        the last one at that K_T, else solved here from the linear guess), its element
+        coordinates ``Z = rows q`` added: the solution, or ``error`` when that fails too
+        (the damped Newton of the larger balance can go astray from the linear guess in a
+        Jenkins slider's deep slip where the base balance does not)."""
+        j, red, a, f, el = s
+        k = j["linear"].k
+        if base is None:
+            bj, bred, ba, bf, _ = self.setup({n: v for n, v in p.items()
+                                              if n in self.base_parameters
+                                              or n == "log10_kt"})
+            base = resonance_batch([(bred, bj["params"], bj["linear"].load, bf, ba, ())], k)[0]
+            if isinstance(base, Exception):
+                return error
+        rows = [np.atleast_2d(e.rows) for e in el]
+        Z = base.q @ np.vstack(rows).T if rows else np.zeros((base.q.shape[0], 0), complex)
+        guess = replace(base, element_harmonics=Z, element_amplitude=np.abs(Z))
+        r = resonance_batch([(red, j["params"], j["linear"].load, f, a, el)], k, [guess])[0]
+        return error if isinstance(r, Exception) else r
 
     def _response(self, s, guess):
         """The response or random route of set-up parameters ``s`` from ``guess``: the
@@ -333,7 +333,7 @@ class FELevels:
         joint = {k: v for k, v in j.items() if k not in ("params", "linear")}
         joint.update(grip=lin.grip, structure=self.structure(lin), fe_mode=lin.fe_mode,
                      stiffness_scale=(2 * math.pi * float(p["f0_hz"]) / lin.omega_k) ** 2)
-        return LevelPrediction(omega2=omega2, zeta=zeta, slip_over_phi_max=slip / j["phi_max"],
+        return LevelPrediction(omega2=omega2, zeta=zeta, slip_over_phi_max=slip / j["slip_scale"],
                                joint=joint, modal_amplitude=modal, fallbacks=fallbacks)
 
 

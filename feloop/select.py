@@ -33,6 +33,7 @@ import numpy as np
 
 from feloop.causes import EXTENSIONS, Combined
 from feloop.engagement import KT_GRID, check_engagement, engagement
+from feloop.joint_forms import MICRO_LIMIT
 from feloop.levels import BASE_PARAMETERS, FELevels, Simulator
 from inverse import judge
 from inverse.diagnosis.causes import CATALOGUE
@@ -44,8 +45,6 @@ from inverse.update import (SIMULATION_FAILURES, InternalError, NoiseModel, Para
 __all__ = ["MICRO_LIMIT", "estimator_start", "base_parameters", "Headline", "fe_noise",
            "untestable", "fit_base", "cold_failure", "fe_select", "chosen_model"]
 
-#: ``ln_phimax`` this large means ``beta = 0`` (the micro-slip limit) for any model here.
-MICRO_LIMIT = 50.0
 #: Largest stuck frequency of the paper's estimator taken as a start, over the first
 #: level's frequency (assumed: a joint that softens a mode by 25 % between zero amplitude
 #: and its lowest tested level is past micro-slip there).
@@ -80,19 +79,19 @@ def estimator_start(data, levels) -> tuple[dict | None, str | None]:
 def base_parameters(data, mask, fe: FELevels, estimated=None) -> tuple[dict, list]:
     """Parameters of the base model and their starts; the start list holds the paper's
     estimator (:func:`estimator_start`, the fit levels; ``estimated``: its result when
-    already computed), two others of chi and, when the estimator gave the first, the
-    start from the first level alone (the frequency bounds hold both)."""
+    already computed: its ``zeta_v`` and ``f0_hz`` for any law), the further starts of
+    the law's form (:meth:`feloop.joint_forms.JointForm.starts`: two others of chi for
+    Iwan joints) and, when the estimator gave the first, the start from the first level
+    alone (the frequency bounds hold both)."""
     lv = [int(v) for v in data.level[mask]]
     w1 = math.sqrt(float(data.omega2[0]))
     naive = {"chi": -0.4, "ln_dc1": math.log(2.0 * float(data.omega2[0]) * 1e-4),
              "zeta_v": float(data.zeta[0]), "f0_hz": w1 / (2 * math.pi)}
     est, _ = estimator_start(data, lv) if estimated is None else estimated
     first = est or naive
-    chi0, dc0 = first["chi"], math.exp(first["ln_dc1"])
     zv0, f00 = first["zeta_v"], first["f0_hz"]
-    P = {"chi": Parameter("chi", chi0, -0.98, -0.005, 0.05, "1", "Iwan exponent"),
-         "ln_dc1": Parameter("ln_dc1", math.log(dc0), -15.0, 15.0, 0.2, "ln(rad^2/s^2)",
-                             "ln |kappa1| B~ at level 1: the joints' modal damping there"),
+    joint = fe.form.parameters(first)
+    P = {**{n: joint[n] for n in fe.form.names},
          "zeta_v": Parameter("zeta_v", zv0, 1e-5, 0.2, 1e-5, "1",
                              "viscous modal damping ratio"),
          "f0_hz": Parameter("f0_hz", f00, 0.95 * min(f00, naive["f0_hz"]),
@@ -101,12 +100,10 @@ def base_parameters(data, mask, fe: FELevels, estimated=None) -> tuple[dict, lis
          "log10_kt": Parameter("log10_kt", math.log10(fe.default_kt),
                                6.0, 11.0, 0.5, "log10 N/m",
                                "stuck tangential stiffness of all joints together"),
-         "ln_phimax": Parameter("ln_phimax", MICRO_LIMIT, math.log(1e-3), MICRO_LIMIT, 0.35,
-                                "1", "ln(phi_max / a_ref): macro-slip onset in units of "
-                                "the level-1 joint slip (beta = 0 above its limit)")}
-    starts = [{}] + [{"chi": c} for c in (-0.2, -0.6) if abs(c - chi0) > 0.05]
+         **{n: v for n, v in joint.items() if n not in fe.form.names}}
+    starts = [{}] + fe.form.starts(first)
     if est is not None:                  # a noisy series can mislead the estimator
-        starts.append(naive)
+        starts.append({k: v for k, v in naive.items() if k in P})
     return P, starts
 
 
@@ -125,7 +122,7 @@ class Headline:
         h = np.flatnonzero(self.held_out)
         return {"frequency_hz": pred.frequency_hz[h].tolist(), "zeta": pred.zeta[h].tolist(),
                 "top_slip_over_phi_max": float(pred.slip_over_phi_max[-1]),
-                "R": pred.joint["R"], "phi_max": pred.joint["phi_max"]}
+                "R": pred.joint.get("R", math.nan), "phi_max": pred.joint["slip_scale"]}
 
 
 def fe_noise(data, cap: bool = True):
@@ -141,14 +138,17 @@ def fe_noise(data, cap: bool = True):
                           dof=None if all(math.isinf(d) for d in dof) else int(min(dof)))
 
 
-def untestable(data, catalogue=None) -> dict:
+def untestable(data, catalogue=None, law: str = "iwan4") -> dict:
     """Causes the data cannot test at the FE level, with the reason (module docstring);
     every cause of the ``catalogue`` (default: :data:`inverse.diagnosis.causes.CATALOGUE`)
-    without an FE realization (:data:`feloop.causes.EXTENSIONS`) is listed as not
-    tested at the FE level, never skipped without a word."""
+    without an FE realization (:data:`feloop.causes.EXTENSIONS`), or whose realization
+    does not extend joints of ``law`` (``Extension.laws``), is listed as not tested at
+    the FE level, never skipped without a word."""
     out = {c: "no FE realization (FE_REALIZATION = None in its cause file): not tested "
               "at the FE level"
            for c in (CATALOGUE if catalogue is None else catalogue) if c not in EXTENSIONS}
+    out.update({c: f"its FE realization extends {' and '.join(e.laws)} joints, not {law}"
+                for c, e in EXTENSIONS.items() if e.laws and law not in e.laws})
     out["nonproportional-amplitude"] = ("the FE fit compares omega2 and zeta only; a force "
                                         "shortfall needs a response channel")
     if not judge.time_separable(data.level, data.run_order, data.resonant_amplitude):
@@ -230,14 +230,15 @@ def _problem(base_problem, fe, ext, base_pred, top):
                          describe=Headline(fe, ~base_problem.fit_mask, ext))
 
 
-def _fit_extension(problem, ext, start_values, chi_starts, basins=None):
-    """Multi-start fit of ``ext`` (its starts x ``chi_starts``) from ``start_values``,
-    only the starts of :func:`_basin_starts`; (fit or None, the starts, the distinct
-    optima: :func:`fit_base`)."""
-    free = BASE_PARAMETERS + tuple(ext.parameter_names)
+def _fit_extension(problem, ext, start_values, joint_starts, base, basins=None):
+    """Multi-start fit of ``ext`` (its starts x ``joint_starts``, dicts of joint
+    parameters) from ``start_values``, ``base``: the base model's parameters; only the
+    starts of :func:`_basin_starts`; (fit or None, the starts, the distinct optima:
+    :func:`fit_base`)."""
+    free = tuple(base) + tuple(ext.parameter_names)
     specs = [problem.parameters[n] for n in ext.parameter_names]
-    starts = [dict(start_values, chi=chi, **s0) for s0 in ext.start_sets(specs)
-              for chi in chi_starts]
+    starts = [dict(start_values, **j, **s0) for s0 in ext.start_sets(specs)
+              for j in joint_starts]
     f, s, kept = fit_base(problem, starts, free, _basin_starts(starts, basins, ext.cause))
     return (f if f is not None and f.success else None), s, kept
 
@@ -297,7 +298,7 @@ def _select(data, mask, fe, causes, say, noises, basins) -> dict:
                                  describe=Headline(fe, ~mask))
     say("base")
     found = {}
-    bfit, base_starts, found["none"] = fit_base(base_problem, starts, BASE_PARAMETERS,
+    bfit, base_starts, found["none"] = fit_base(base_problem, starts, fe.base_parameters,
                                                 _basin_starts(starts, basins, "none"))
     if not bfit.success:
         raise InternalError(f"the base FE model could not be fitted from any of its "
@@ -309,11 +310,9 @@ def _select(data, mask, fe, causes, say, noises, basins) -> dict:
         fe.reset()
         base_pred = fe.predict(bfit.values)
     top = int(np.flatnonzero(mask).max())
-    skip = untestable(data)
+    skip = untestable(data, law=fe.form.law)
     exts, singles = {}, []
-    # chi from the base optimum and from -0.5 (an extension can move chi far: a slip
-    # onset or a hardening bends the top levels, which chi then need not do)
-    chi_starts = sorted({bfit.values["chi"], -0.5})
+    joint_starts = fe.form.restarts(bfit.values)
     for cause in (EXTENSIONS if causes is None else causes):
         if cause in skip:
             continue
@@ -321,7 +320,8 @@ def _select(data, mask, fe, causes, say, noises, basins) -> dict:
         ext = EXTENSIONS[cause]
         try:
             prob = _problem(base_problem, fe, ext, base_pred, top)
-            f, s, found[cause] = _fit_extension(prob, ext, bfit.values, chi_starts, basins)
+            f, s, found[cause] = _fit_extension(prob, ext, bfit.values, joint_starts,
+                                                fe.base_parameters, basins)
         except (InternalError, ValueError, ArithmeticError) as exc:
             # one cause that cannot be set up is counted and reported, not fatal
             exts[cause] = (ext, FitCandidate((cause,), base_problem, None, [],
@@ -351,8 +351,7 @@ def _select(data, mask, fe, causes, say, noises, basins) -> dict:
             pair = Combined(EXTENSIONS[first], EXTENSIONS[other])
             prob = _problem(base_problem, fe, pair, base_pred, top)
             f, s, found[pair.cause] = _fit_extension(prob, pair, exts[first][1].fit.values,
-                                                     [exts[first][1].fit.values["chi"]],
-                                                     basins)
+                                                     [{}], fe.base_parameters, basins)
             why = cold_failure(fe, f, pair)
             exts[pair.cause] = (pair, FitCandidate((first, other), prob, None if why else f,
                                                    s, why))

@@ -205,7 +205,8 @@ def run_update(settings: UpdateSettings, levels, executor="serial", progress: bo
         "all_levels": every, "verdict": verdict, "held_out": rows, "misses": misses,
         "notes": [note] if note else [],
         "parameters": P, "fit": best, "base_fit": base, "profiles": profiles,
-        "micro_limit": MacroSlip.micro_limit(fe, best.values),
+        "micro_limit": MacroSlip.micro_limit(fe, best.values)
+        if fe.form.law == "iwan4" else None,
         "prediction": prediction, "base_prediction": fe.predict(base.values),
         "nominal": problem.describe(best.values), "sensitivity": sens,
         "executor": executor if isinstance(executor, str) else executor.describe(),

@@ -18,7 +18,7 @@ import numpy as np
 from feloop.causes import force_scale_power
 from feloop.diagnosis import unconverged_fits
 from feloop.given_model import data_block, fit_block
-from feloop.levels import BASE_PARAMETERS, level_entries
+from feloop.levels import level_entries
 from feloop.tie import tie_statement
 from feloop.update_text import LABEL, format_text, markdown
 from inverse.fe_selection import fit_test_of
@@ -96,15 +96,30 @@ def _parameter_entry(r: dict, name: str, p) -> dict:
 
 
 def _derived(r: dict) -> dict:
-    """The joint the fitted model makes (SI units) and the modal figures behind it."""
-    j, best = r["prediction"].joint, r["fit"]
-    return {"R_tilde": j["R"], "phi_max_m": j["phi_max"], "F_S_N": j["F_S"],
-            "beta": j["beta"], "K_T_N_per_m": j["K_T"], "grip_m": j["grip"],
+    """The joint the fitted model makes (SI units; its law's figures,
+    :meth:`feloop.joint_forms.JointForm.derived`) and the modal figures behind it."""
+    j, best, form = r["prediction"].joint, r["fit"], r["selection"]["fe"].form
+    own = form.derived(j, best.values)
+    return {**own, "K_T_N_per_m": j["K_T"], "grip_m": j["grip"],
             "structure": j["structure"], "fe_mode": j["fe_mode"],
             "stiffness_scale": j["stiffness_scale"], "zeta_v": best.values["zeta_v"],
-            "kappa1_B_level1": math.exp(best.values["ln_dc1"]),
-            "kappa2_over_kappa1": kappa_ratio(best.values["chi"], "exact"),
-            "force_scale_N_per_unit": r["settings"].force_scale}
+            **(form.modal(best.values) if hasattr(form, "modal") else {}),
+            "force_scale_N_per_unit": r["settings"].force_scale,
+            "law": form.law, "slip_scale_name": form.scale_name, "joint_text": form.words(own), "joint_element": form.element,
+            "force_scale_scaling": form.scaling}
+
+
+def _tie(r: dict) -> dict:
+    """The Iwan tie of the data (:func:`feloop.tie.tie_statement`) for Iwan joints; for
+    another law, what its base model leaves over the fit levels (the tie is Iwan's)."""
+    data, mask, base = r["data"], r["fit_mask"], r["base_fit"]
+    law = r["selection"]["fe"].form.law
+    if law == "iwan4":
+        return tie_statement(data, mask)
+    lv = [int(v) for v in data.level[mask]]
+    return {"law": law, "text": f"levels {lv[0]}->{lv[-1]}: the base model of {law} joints "
+                                f"leaves chi2 = {base.chi2:.1f} on {base.dof} degrees of "
+                                f"freedom (the Iwan tie does not apply to {law} joints)"}
 
 
 def _statements(r: dict, test) -> list:
@@ -119,8 +134,9 @@ def _statements(r: dict, test) -> list:
            f"chi2 = {best.chi2:.1f} on {best.dof} degrees of freedom, fit test p = "
            f"{test.p_value:.2g} ({test.test})" if test.p_value is not None else
            f"chi2 = {best.chi2:.1f} ({test.test})",
-           f"base model (no cause): chi2 = {base.chi2:.1f} on {base.dof} degrees of freedom",
-           tie_statement(r["data"], r["fit_mask"])["text"]]
+           f"base model (no cause): chi2 = {base.chi2:.1f} on {base.dof} degrees of freedom"]
+    if r["selection"]["fe"].form.law == "iwan4":        # the tie is the Iwan joint's
+        out.append(tie_statement(r["data"], r["fit_mask"])["text"])
     out += [f"{n} sits on its {best.at_bound[n]} bound ({best.values[n]:.4g}); its interval "
             f"is a profile, and the predictions hold it there"
             for n in best.free if best.at_bound.get(n)]
@@ -164,7 +180,7 @@ def summary(r: dict) -> dict:
             "engagement": r["selection"]["engagement"].to_json(),
             "engagement_text": r["selection"]["engagement"].line(),
             "plausibility": r.get("plausibility", []),
-            "tie": tie_statement(data, mask), "base_chi2": r["base_fit"].chi2,
+            "tie": _tie(r), "base_chi2": r["base_fit"].chi2,
             "cause": r["verdict"]["cause"], "also": r["verdict"]["also"],
             "model": r["candidate"], "unexplained": r["verdict"]["unexplained"],
             "verdict": r["verdict"], "fit_levels_verdict": sel.verdict_json(),
@@ -210,7 +226,7 @@ def write_update(r: dict, out) -> list:
              "model": s["model"], "unexplained": s["unexplained"],
              "fit_test": s["fit_test"], "parameters": s["parameters"], "joint": s["derived"],
              "fit_levels": s["fit_levels"], "noise": s["noise"],
-             "base_parameters": list(BASE_PARAMETERS),
+             "base_parameters": list(r["selection"]["fe"].base_parameters),
              "fit": fit_block(r["fit"], r["parameters"]),
              "data": data_block(data, r["settings"].mode_label, r["settings"].force_scale)}
     files = {"updated_model.json": model, "update.json": s}

@@ -13,7 +13,8 @@ __all__ = ["LABEL", "format_text", "markdown", "plausibility_lines"]
 
 #: the parameters' names in the text and the figures
 LABEL = {"chi": "chi", "ln_dc1": "ln |kappa1|B~ (level 1)", "zeta_v": "zeta_v",
-          "f0_hz": "f0 [Hz]", "ln_phimax": "ln(phi_max/a_ref)", "log10_kt": "log10 K_T [N/m]"}
+          "f0_hz": "f0 [Hz]", "ln_phimax": "ln(phi_max/a_ref)", "log10_kt": "log10 K_T [N/m]",
+          "ln_slip": "ln(slip scale/a_ref)", "alpha": "alpha (gross-slip stiffness)"}
 
 
 def _fmt(v, digits=6):
@@ -60,8 +61,7 @@ def _parameter_lines(s: dict) -> list:
         lines.append(f"{LABEL.get(name, name):26s} {value:>14s}  {ivs:28s} "
                      f"{p.get('status', '')} / {p['kind']}{start}{ab}{scale}")
     d = s["derived"]
-    lines.append(f"joint: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m, "
-                 f"F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} "
+    lines.append(f"joint: {d['joint_text']}, K_T = {d['K_T_N_per_m']:.3g} "
                  f"N/m, {d['structure']}; force scale "
                  f"{d['force_scale_N_per_unit']:g} N/V assumed (omega2, zeta invariant to it)")
     return lines
@@ -69,8 +69,9 @@ def _parameter_lines(s: dict) -> list:
 
 def _level_lines(s: dict) -> list:
     """Every level, measured and modelled (``*``: held out)."""
+    scale = f"slip/{s['derived'].get('slip_scale_name', 'phi_max')}"
     return ["level held  f meas [Hz]  f model [Hz]  err [Hz]   zeta meas   zeta model  "
-            "err [%]  slip/phi_max"] + [
+            f"err [%]  {scale:>12s}"] + [
         f"{row['level']:5d} {'*' if row['held_out'] else ' ':>4s} "
         f"{row['measured']['frequency_hz']:12.5f} {row['model']['frequency_hz']:13.5f} "
         f"{row['error_hz']:+9.4f} {row['measured']['zeta']:11.6f} "
@@ -99,18 +100,18 @@ def _fit_state_lines(s: dict) -> list:
 
 def _sensitivity_lines(s: dict) -> list:
     """What the data do not determine, and what the assumed properties move."""
-    lines = []
+    lines, scale = [], s["derived"].get("slip_scale_name", "phi_max")
     for name, sv in s["sensitivity"].items():
         f, z = sv["frequency_hz"], sv["zeta"]
         lines.append(f"not determined: {LABEL.get(name, name)} (inside the interval: "
                      f"{_fmt(min(sv['grid_inside']), 4)} .. {_fmt(max(sv['grid_inside']), 4)}); "
                      f"top held-out level moves {f['min'][-1]:.4f}..{f['max'][-1]:.4f} Hz, "
-                     f"zeta {z['min'][-1]:.5f}..{z['max'][-1]:.5f}, top slip/phi_max "
+                     f"zeta {z['min'][-1]:.5f}..{z['max'][-1]:.5f}, top slip/{scale} "
                      f"{sv['top_slip_over_phi_max']['min']:.3g}.."
                      f"{sv['top_slip_over_phi_max']['max']:.3g}")
     if s["assumptions"]:
         lines.append("assumed properties changed (refitted): dchi2, top held-out level shift "
-                     "[Hz], [% zeta], top slip/phi_max")
+                     f"[Hz], [% zeta], top slip/{scale}")
         # the shifts to one digit of the top level's noise sd: a shift is read against it,
         # and below a tenth of it it is the refits' convergence (1e-6 Hz, 1e-3 % that move
         # with the BLAS kernel), not the assumption's effect
@@ -155,8 +156,10 @@ def markdown(s: dict) -> str:
                      f"{np.round(v['zeta']['min'], 6).tolist()} .. "
                      f"{np.round(v['zeta']['max'], 6).tolist()}, top slip/phi_max "
                      f"{v['top_slip_over_phi_max']['min']:.3g} .. "
-                     f"{v['top_slip_over_phi_max']['max']:.3g}, R~ {v['R']['min']:.3g} .. "
-                     f"{v['R']['max']:.3g}" for n, v in s["sensitivity"].items()) or "- none"
+                     f"{v['top_slip_over_phi_max']['max']:.3g}"
+                     + (f", R~ {v['R']['min']:.3g} .. {v['R']['max']:.3g}"
+                        if math.isfinite(v['R']['min']) else "")
+                     for n, v in s["sensitivity"].items()) or "- none"
     assumed = "\n".join(
         f"| {a['assumption']} | {a['delta_chi2']:+.2f} | {_fmt(a['shift_top_frequency_hz'], 3)} | "
         f"{_fmt(None if a['shift_top_zeta_rel'] is None else 100 * a['shift_top_zeta_rel'], 3)} | "
@@ -165,8 +168,8 @@ def markdown(s: dict) -> str:
     return f"""# FE model updating: {s['case']}
 
 Data: `{s['source']}`, mode {s['mode']}; fitted levels {s['fit_levels']}, held out
-{s['held_out_levels']}. The nonlinear FE model (one continuous four-parameter Iwan
-element per joint node, first-harmonic balance with the exact describing function at the
+{s['held_out_levels']}. The nonlinear FE model ({d['joint_element']},
+first-harmonic balance with the exact describing function at the
 phase resonance of the mode) is fitted by weighted least squares to omega^2 and zeta of
 the fit levels. Noise: {s['noise']['source']}: sigma_omega2 =
 {s['noise']['sigma_omega2'][0]:.3g} rad^2/s^2, sigma_zeta = {s['noise']['sigma_zeta'][0]:.3g}.
@@ -182,14 +185,13 @@ widened by the misfit (chi2/dof) when the model misfits.
 | --- | --- | --- | --- | --- | --- |
 {rows}
 
-The joint they make: R~ = {d['R_tilde']:.4g} N/m^(chi+2), phi_max = {d['phi_max_m']:.4g} m,
-F_S = {d['F_S_N']:.4g} N, beta = {d['beta']:.4g}, K_T = {d['K_T_N_per_m']:.3g} N/m;
+The joint they make: {d['joint_text']}, K_T = {d['K_T_N_per_m']:.3g} N/m;
 {d['structure']}, force scale {d['force_scale_N_per_unit']:g} N/V (assumed; omega^2 and zeta are exactly invariant
-to it, R~ scales as its -(chi+1) power, phi_max and F_S as its first power).
+to it, {d['force_scale_scaling']}).
 
 ## Levels (* = held out)
 
-| level | f measured [Hz] | f model [Hz] | error [Hz] | zeta measured | zeta model | error [%] | slip/phi_max |
+| level | f measured [Hz] | f model [Hz] | error [Hz] | zeta measured | zeta model | error [%] | slip/{d.get('slip_scale_name', 'phi_max')} |
 | --- | --- | --- | --- | --- | --- | --- | --- |
 {lv}
 

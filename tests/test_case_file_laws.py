@@ -1,8 +1,8 @@
 """Joint laws of a case file (``law = "iwan4" | "jenkins" | "bouc-wen"``, casefile/laws.py):
 each law's own keys, a key of another law refused in one line naming file, table and key
 (exit status 2), ``case check`` listing the law and the kind of each of its keys, and
-the FE loop (update, diagnose --case, loop, uncertainty, --backbone) refusing a law it
-does not fit in one line that names the commands that take it."""
+the Iwan-only commands of the FE loop (uncertainty, --backbone) refusing another law in
+one line."""
 from __future__ import annotations
 
 import json
@@ -98,7 +98,7 @@ def test_unknown_law_lists_the_three(tmp_path):
 def test_case_check_lists_the_law_and_the_kind_of_each_key(tmp_path, capsys, law):
     """A key left out is ``fitted``; the others ``given``; in the text and the JSON."""
     keys = {"iwan4": ("chi", "fs", "beta"), "jenkins": ("fs",),
-            "bouc-wen": ("fs", "alpha", "shape")}[law]
+            "bouc-wen": ("fs", "shape", "alpha")}[law]
     left_out = keys[-1]
     text = re.sub(rf"(?m)^{left_out} = .*\n", "", _text(law))
     path = _write(tmp_path, text)
@@ -117,6 +117,17 @@ def test_case_check_lists_the_law_and_the_kind_of_each_key(tmp_path, capsys, law
     assert entry["law"] == law and kinds == {"kt": "given", **{k: "given" for k in keys[:-1]},
                                              left_out: "fitted"}
     assert s["fitted_by_update"] == [f"interface.0.{left_out}"]
+
+
+def test_a_bouc_wen_shape_left_out_is_assumed_by_update(tmp_path, capsys):
+    """update fits fs and alpha of a Bouc-Wen joint, not its loop shape: left out, it is
+    ``assumed`` (0.5, feloop.joint_forms.BOUC_WEN_SHAPE), never called fitted."""
+    path = _write(tmp_path, re.sub(r"(?m)^shape = .*\n", "", _text("bouc-wen")))
+    assert main(["case", "check", str(path), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    kinds = {p["key"]: p["kind"] for p in s["joint_laws"][0]["parameters"]}
+    assert kinds["shape"] == "assumed" and s["assumed_by_update"] == ["interface.0.shape"]
+    assert s["fitted_by_update"] == []
 
 
 def test_backbone_needs_every_key_of_the_law(tmp_path, capsys):
@@ -161,19 +172,17 @@ COMMANDS = {
 
 
 @pytest.mark.parametrize("law", ["jenkins", "bouc-wen"])
-@pytest.mark.parametrize("command", list(COMMANDS))
-def test_fe_loop_refuses_another_law_in_one_line(tmp_path, capsys, law, command):
-    """Not fitted (the FE-levels model fits Iwan closed forms): one line, exit 2, naming
-    the file, the interface, the law and the commands that take it."""
+@pytest.mark.parametrize("command", ["uncertainty", "estimate-backbone"])
+def test_iwan_only_commands_refuse_another_law_in_one_line(tmp_path, capsys, law, command):
+    """The Monte Carlo (drawn in chi) and the estimator's backbone take Iwan joints only:
+    one line, exit 2, naming the law; update, diagnose --case and loop take every law
+    (tests/test_case_file_law_update.py)."""
     path = _with_table(tmp_path, law)
     argv = COMMANDS[command](str(path), str(tmp_path / LEVELS.name))
-    if command == "loop":
-        argv += ["--out", str(tmp_path / "loop")]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1, err
-    assert f"[interface.0] law = '{law}'" in err and str(path.name) in err
-    assert "backbone, ringdown" in err and "update" in err
+    assert law in err and ("update" in err or "Iwan" in err)
 
 
 def test_the_iwan4_file_keeps_the_fe_loop():
@@ -184,14 +193,15 @@ def test_the_iwan4_file_keeps_the_fe_loop():
     assert case.refused == {}
 
 
-def test_an_updated_model_is_refused_for_another_law(tmp_path, capsys):
+def test_an_updated_model_of_another_law_is_refused(tmp_path, capsys):
     path = _with_table(tmp_path, "jenkins")
     model = tmp_path / "updated_model.json"
-    model.write_text(json.dumps({"case": "bolted-lap-jenkins", "cause": "none"}))
+    model.write_text(json.dumps({"case": "bolted-lap-jenkins", "cause": "none",
+                                 "joint": {"law": "iwan4"}}))
     assert main(["backbone", "--case", str(path), "--model", str(model), "--points", "3",
                  "--no-progress"]) == 2
     err = capsys.readouterr().err
-    assert "Iwan joints" in err and err.count("\n") == 1
+    assert "an update of iwan4 joints" in err and err.count("\n") == 1
 
 
 def test_every_package_raises_input_faults():

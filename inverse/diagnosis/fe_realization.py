@@ -44,6 +44,9 @@ class Extension:
     #: the order in which the FE level fits the realizations (each fit warm-starts the
     #: next simulation, so the order is part of the result)
     fit_order = 100
+    #: the joint laws whose FE-levels model it extends (:mod:`feloop.joint_forms`;
+    #: empty: every law)
+    laws: tuple = ()
     #: the fitted value scales as ``s ** force_scale_power`` with the assumed force scale
     #: ``s`` (N per excitation unit; omega^2 and zeta are invariant to it): 0 = it does not
     force_scale_power = 0

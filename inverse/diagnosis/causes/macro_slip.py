@@ -109,6 +109,7 @@ def testable(obs):
 class MacroSlip(Extension):
     cause, parameter = "macro-slip", "ln_phimax"
     fit_order = 10
+    laws = ("iwan4",)       # a Jenkins or Bouc-Wen joint slides as a whole already
     description = "ln(phi_max / a_ref): macro-slip onset in units of the level-1 slip"
     lower, upper = math.log(1e-3), math.inf
 
