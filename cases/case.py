@@ -5,8 +5,7 @@ methods (``_<capability>`` in a subclass), offered when the case qualifies for i
 (:meth:`Case.offers`). A command asks
 for a capability (:meth:`Case.require`); a case that lacks it is a one-line
 :class:`ident.errors.InputError` naming the case and what it offers, or the case's own
-reason when it refuses the capability (:attr:`Case.refused`: a case file whose joint
-law the FE loop does not fit). The kinds of case: a case file
+reason when it declines a capability it could offer (:attr:`Case.refused`). The kinds of case: a case file
 (:class:`cases.case_file.CaseFileCase`, built from its TOML alone), the double beam
 (:class:`cases.double_beam.case.DoubleBeamCase`: its case file with the Python model of
 the paper's study beside it) and the lumped 10-DOF model

@@ -2,9 +2,8 @@
 values), the measured data it names, its nonlinear model when every joint parameter is
 given (any joint law, :mod:`casefile.laws`), its summary, and (joint interfaces of one
 law with their ``kt``, a drive and a measured-data table) its FE-levels model and
-``update`` (:mod:`feloop.case_file`). A file of a law other than ``iwan4`` refuses
-``fe_uncertainty`` in one line that says which commands take its law
-(:func:`feloop.case_file.refusal`)."""
+``update`` and ``fe_uncertainty`` (:mod:`feloop.case_file`), for every joint law
+(:mod:`feloop.joint_forms`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -33,13 +32,8 @@ class CaseFileCase(Case):
         if joints and cf.drive is not None and not missing_joint_parameters(cf):
             out.append("nonlinear_model")
         if fe_loop.qualifies(cf):
-            out += ["fe_levels", "update"] + ([] if fe_loop.refusal(cf) else ["fe_uncertainty"])
+            out += ["fe_levels", "update", "fe_uncertainty"]
         return tuple(out)
-
-    @property
-    def refused(self) -> dict:
-        why = fe_loop.refusal(self.file)
-        return {"fe_uncertainty": why} if why else {}
 
     def _calibrated_file(self, element_size=None, calibrated=True):
         """(the file at ``element_size``, calibrated unless told not to; its report)."""

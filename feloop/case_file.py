@@ -4,8 +4,7 @@ of :func:`feloop.select.fe_select` choosing the model), the assumed properties
 ``update --assumptions`` changes (:func:`assumption_variants`) and ``uncertainty``
 (:func:`feloop.uncertainty.run_fe_uncertainty` on it), for a file whose joint
 interfaces have one law (``iwan4``, ``jenkins`` or ``bouc-wen``: :mod:`feloop.joint_forms`)
-and a ``kt``, with a ``[drive]`` and a ``[measured]`` table (``uncertainty`` takes
-``iwan4`` only).
+and a ``kt``, with a ``[drive]`` and a ``[measured]`` table.
 
 Defaults a command may override: the data are the file's table, the mode label the
 file's ``[measured] mode`` when the table has it (else the table's only mode label),
@@ -28,13 +27,8 @@ from casefile.parameters import get_parameter, set_parameter
 from casefile.plausibility import joint_plausibility
 from ident.errors import InputError
 
-__all__ = ["qualifies", "refusal", "levels_builder", "assumption_variants",
+__all__ = ["qualifies", "levels_builder", "assumption_variants",
            "update_builder", "fitted_plausibility", "uncertainty_builder"]
-
-#: the commands of the FE loop that take the four-parameter Iwan joint only (the
-#: Monte Carlo draws in chi, the backbone prediction is the paper's estimator's)
-IWAN_ONLY = "uncertainty and --backbone"
-
 
 def qualifies(cf) -> bool:
     """The file has what the FE loop needs (module docstring): joint interfaces of one
@@ -42,19 +36,6 @@ def qualifies(cf) -> bool:
     joints = [i for i in cf.interfaces if i.tangential == "joint"]
     return bool(joints) and all(i.kt for i in joints) and len({i.law for i in joints}) == 1 \
         and cf.drive is not None and cf.measured is not None and bool(cf.measured.files)
-
-
-def refusal(cf) -> str | None:
-    """Why :data:`IWAN_ONLY` refuse the file: one line naming its first joint interface
-    of a law other than ``iwan4`` (``update``, ``diagnose --case`` and ``loop`` take
-    every law); None when all are iwan4."""
-    other = [(k, i.law) for k, i in enumerate(cf.interfaces)
-             if i.tangential == "joint" and i.law != "iwan4"]
-    if not other:
-        return None
-    k, law = other[0]
-    return (f"{cf.path}: [interface.{k}] law = {law!r}: {IWAN_ONLY} take Iwan joints "
-            f"(law 'iwan4') only; update, diagnose --case and loop fit {law} joints")
 
 
 @dataclass(frozen=True)

@@ -90,9 +90,9 @@ def physical_check(pred, values: dict, stiffens: bool = False) -> None:
     """ValueError (one line, the first level that fails) unless prediction ``pred``
     (:class:`feloop.levels.LevelPrediction`) of parameter set ``values`` is
     physical (module docstring)."""
-    fs, pm = pred.joint["F_S"], pred.joint["phi_max"]
+    fs, pm = pred.joint["F_S"], pred.joint["slip_scale"]
     if not (math.isfinite(fs) and fs > 0 and math.isfinite(pm) and pm > 0):
-        raise ValueError(f"no joint: strength F_S = {fs:.3g} N, phi_max = {pm:.3g} m")
+        raise ValueError(f"no joint: strength F_S = {fs:.3g} N, slip scale {pm:.3g} m")
     f, z = pred.frequency_hz, pred.zeta
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(z))):
         raise ValueError("a level's frequency or damping ratio is not finite")
@@ -120,8 +120,8 @@ def simulate_levels(inputs: LevelsSweepInputs, values: dict) -> dict:
     pred = fe.predict(values, ext)
     physical_check(pred, values, bool(getattr(ext, "stiffens", False)))
     return {"frequency_hz": pred.frequency_hz, "zeta": pred.zeta,
-            "slip_over_phi_max": pred.slip_over_phi_max, "chi": values["chi"],
-            "R": pred.joint["R"], "phi_max": pred.joint["phi_max"],
+            "slip_over_phi_max": pred.slip_over_phi_max, "chi": values.get("chi", math.nan),
+            "R": pred.joint.get("R", math.nan), "phi_max": pred.joint["slip_scale"],
             "F_S": pred.joint["F_S"], "zeta_viscous": values["zeta_v"],
             "f0_hz": values["f0_hz"], "fallback_levels": float(len(pred.fallback_lines()))}
 
@@ -236,7 +236,7 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
     mc_f = _quantiles([s.values["frequency_hz"] for s in ok], q)
     mc_z = _quantiles([s.values["zeta"] for s in ok], q)
     rows = _rows(data, mask, nominal, mc_f, mc_z)
-    chis = [float(s.values["chi"]) for s in ok]
+    chis = [float(s.values["chi"]) for s in ok if math.isfinite(s.values["chi"])]
     draws = sum(s.n_draws for s in samples)
     return {
         "case": study.case, "source": str(study.data_path), "mode": study.mode_label,
@@ -249,7 +249,8 @@ def run_fe_uncertainty(levels, model, study: LevelsStudy, n_samples: int = 200,
                 "hi": float(np.quantile(chis, q[1]))} if chis else None,
         "levels": rows, "n_failed": len(samples) - len(ok),
         "n_with_fallback": int(sum(s.values.get("fallback_levels", 0) > 0 for s in ok)),
-        "failures": [{"index": s.index, "chi": s.p - 1.0, "status": s.status}
+        "failures": [{"index": s.index, "chi": None if math.isnan(s.p) else s.p - 1.0,
+                      "status": s.status}
                      for s in samples if s.status != "ok"],
         "store": None if store is None else str(store.path),
         "executor": executor.describe() if isinstance(executor, ExecutorSpec) else str(executor),

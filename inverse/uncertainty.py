@@ -214,7 +214,8 @@ class FitDistribution:
     draws kept estimates its mass there.
 
     Parameters are named (``names``); a sample is the full parameter dict
-    (:meth:`values`), whose ``chi`` and ``ln_dc1`` give the ``(p, ln_kt)`` kept with it.
+    (:meth:`values`), whose ``chi`` and ``ln_dc1`` give the ``(p, ln_kt)`` kept with it
+    (NaN for a joint law without them, :mod:`feloop.joint_forms`).
     """
 
     names: tuple
@@ -269,7 +270,10 @@ class FitDistribution:
         return (self.values(x),)
 
     def joint(self, x) -> tuple:
+        """``(chi + 1, ln K)`` of an Iwan joint's draw; NaN for a law without chi."""
         v = self.values(x)
+        if "chi" not in v:
+            return math.nan, math.nan
         p = v["chi"] + 1.0
         return p, math.log(p) + v["ln_dc1"]
 

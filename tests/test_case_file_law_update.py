@@ -97,6 +97,21 @@ def test_diagnose_case_and_loop_run_on_a_jenkins_file(jenkins_series, tmp_path, 
     assert "the Iwan tie does not apply to jenkins joints" in text
 
 
+def test_uncertainty_draws_the_fitted_jenkins_joint(jenkins_series, tmp_path, capsys):
+    """The Monte Carlo of update's model on a Jenkins file: its draws are the fitted
+    ln_slip, zeta_v, f0_hz (no chi); every sample physical; the nominal inside the
+    samples' 90 % band at every level."""
+    path, _, _ = jenkins_series
+    assert main(["uncertainty", "--case", str(path), "--samples", "12", "--json",
+                 "--out", str(tmp_path / "mc"), "--no-progress"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["distribution"]["parameters"] == ["ln_slip", "zeta_v", "f0_hz"]
+    assert r["chi"] is None and r["n_failed"] == 0
+    for row in r["levels"]:
+        mc = row["mc_frequency_hz"]
+        assert mc["lo"] <= row["nominal_frequency_hz"] <= mc["hi"]
+
+
 def _form_levels(law: str, tmp_path):
     """The FE-levels model of the law's shipped file with a table (its first level the
     reference of the slip scale)."""

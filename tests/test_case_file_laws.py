@@ -1,8 +1,8 @@
 """Joint laws of a case file (``law = "iwan4" | "jenkins" | "bouc-wen"``, casefile/laws.py):
 each law's own keys, a key of another law refused in one line naming file, table and key
 (exit status 2), ``case check`` listing the law and the kind of each of its keys, and
-the Iwan-only commands of the FE loop (uncertainty, --backbone) refusing another law in
-one line."""
+the estimator's backbone prediction (an Iwan joint's) refusing another law in one
+line."""
 from __future__ import annotations
 
 import json
@@ -172,17 +172,16 @@ COMMANDS = {
 
 
 @pytest.mark.parametrize("law", ["jenkins", "bouc-wen"])
-@pytest.mark.parametrize("command", ["uncertainty", "estimate-backbone"])
-def test_iwan_only_commands_refuse_another_law_in_one_line(tmp_path, capsys, law, command):
-    """The Monte Carlo (drawn in chi) and the estimator's backbone take Iwan joints only:
-    one line, exit 2, naming the law; update, diagnose --case and loop take every law
+def test_the_estimators_backbone_refuses_another_law_in_one_line(tmp_path, capsys, law):
+    """The backbone prediction of the paper's estimator is an Iwan joint's: one line,
+    exit 2, naming the law; update, diagnose --case, loop and uncertainty take every law
     (tests/test_case_file_law_update.py)."""
     path = _with_table(tmp_path, law)
-    argv = COMMANDS[command](str(path), str(tmp_path / LEVELS.name))
+    argv = COMMANDS["estimate-backbone"](str(path), str(tmp_path / LEVELS.name))
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1, err
-    assert law in err and ("update" in err or "Iwan" in err)
+    assert law in err and "Iwan joint" in err and "iwanfe update fits them" in err
 
 
 def test_the_iwan4_file_keeps_the_fe_loop():

@@ -23,7 +23,7 @@ def text(r: dict) -> str:
     """The readable report of :func:`feloop.uncertainty.run_fe_uncertainty`."""
     m, c, dist = r["model"], r["confidence"], r["distribution"]
     lo, hi = (100 * (1 - c) / 2, 100 * (1 + c) / 2)
-    ch = r["chi"] or {"median": math.nan, "lo": math.nan, "hi": math.nan}
+    ch = r["chi"]
     ft = m["fit_test"]
     held = [n for n, b in m["at_bound"].items() if b]
     sd = dict(zip(dist["parameters"], dist["sd"]))
@@ -42,8 +42,9 @@ def text(r: dict) -> str:
              + (f"; held at a bound: {', '.join(held)}" if held else ""),
              f"  {r['n_samples']} samples, seed {r['seed']}, {dist['kind']} truncated to the "
              f"parameters' bounds ({_f(None if kept is None else 100 * kept, '.1f')} % of "
-             f"the draws kept): chi median {ch['median']:.4f}, {lo:g}..{hi:g} % "
-             f"{ch['lo']:.4f} .. {ch['hi']:.4f}; {r['n_failed']} failed (not physical or "
+             f"the draws kept)"
+             + (f": chi median {ch['median']:.4f}, {lo:g}..{hi:g} % {ch['lo']:.4f} .. "
+                f"{ch['hi']:.4f}" if ch else "") + f"; {r['n_failed']} failed (not physical or "
              f"not simulated; left out of the quantiles), {r['n_with_fallback']} with a "
              f"steady state reached by a fallback",
              f"  per sample: {r['route']}", ""]
@@ -64,7 +65,8 @@ def text(r: dict) -> str:
                              row[f"measured_{key}_inside"]])
         lines.append("")
     for f in r["failures"][:5]:
-        lines.append(f"failed sample {f['index']} (chi = {f['chi']:.4f}): {f['status']}")
+        chi = "" if f["chi"] is None else f" (chi = {f['chi']:.4f})"
+        lines.append(f"failed sample {f['index']}{chi}: {f['status']}")
     lines.append(f"samples in {r['store']}; total {r['timing_s']['total']:.1f} s "
                  f"({r['executor']})")
     return "\n".join(lines)
