@@ -264,7 +264,7 @@ def test_default_fit_levels_hold_out_the_top_three_and_count_a_repeat_once(
 
 @pytest.mark.parametrize("change, words", [
     ({}, None),
-    ({"phi_max": 0.0}, "no joint"),
+    ({"slip_scale": 0.0}, "no joint"),
     ({"F_S": -1.0}, "no joint"),
     ({"frequency_hz": 80.0 * (1 + 1e-4)}, "above the stuck-joint frequency"),
     ({"zeta": 0.002 * (1 - 1e-4)}, "below the viscous one"),
@@ -280,7 +280,7 @@ def test_an_unphysical_sample_is_a_failure_with_its_reason(change, words):
 
     f = np.array([79.99, 79.9, 79.5])
     z = np.array([0.00201, 0.0025, 0.004])
-    joint = {"phi_max": 1e-6, "F_S": 10.0}
+    joint = {"slip_scale": 1e-6, "F_S": 10.0}       # slip_scale: phi_max of Iwan joints
     if "frequency_hz" in change:
         f[1] = change["frequency_hz"]
     if "zeta" in change:
@@ -295,5 +295,5 @@ def test_an_unphysical_sample_is_a_failure_with_its_reason(change, words):
         physical_check(pred, values)
     stiffens = EXTENSIONS["geometric-hardening"].stiffens
     assert stiffens and not EXTENSIONS["quadratic-damping"].stiffens
-    if "phi_max" not in change and "F_S" not in change:
+    if "slip_scale" not in change and "F_S" not in change:
         physical_check(pred, values, stiffens)
