@@ -50,7 +50,7 @@ def register(subparsers) -> None:
                              "measured data, or 'synthetic:LABEL:SEED' (a simulated, "
                              "identified series hiding LABEL: none, a cause, two causes "
                              "joined by '+', or out-of-catalogue); with FILE: the model "
-                             "case. A case with an FE-levels model (iwan4 joints) also gets "
+                             "case. A case with an FE-levels model (joints of one law) also gets "
                              "the FE-level diagnosis")
     parser.add_argument("--mode", type=int, default=None,
                         help="mode label in the file (default: the only/first one)")

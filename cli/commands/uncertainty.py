@@ -7,7 +7,7 @@ the nominal FE prediction, the sample median and central interval. A case with i
 ``uncertainty`` capability (the double beam: a harmonic-balance stepped sine and modal
 filter per sample, with the estimator's closed-form interval beside,
 :mod:`cases.double_beam.uncertainty`) runs that; any other case with an FE-levels model
-(a case file with iwan4 joints) runs :mod:`feloop.uncertainty` instead: the
+(a case file with joints of one law) runs :mod:`feloop.uncertainty` instead: the
 parameters of the model ``update`` selects for the same levels drawn from its fit (the
 nominal is ``update``'s model; unphysical samples counted failed), each simulated by
 exact describing function at phase resonance. With ``--model DIR/updated_model.json``

@@ -31,9 +31,11 @@ def register(subparsers) -> None:
         NAME, help="fit the FE model's glue joint, damping and frequency to measured levels",
         description=(
             "Model updating by the nonlinear FE simulation itself: the case's FE model with "
-            "one four-parameter Iwan element per joint node (first-harmonic balance, exact "
-            "describing function, phase resonance of the measured mode) fitted to omega^2 "
-            "and zeta of the fit levels: chi, the glue's modal damping at level 1 (R~), the "
+            "its joint law on every joint node (four-parameter Iwan, Jenkins or Bouc-Wen; "
+            "first-harmonic balance, exact describing function, phase resonance of the "
+            "measured mode) fitted to omega^2 and zeta of the fit levels: the joint (Iwan: "
+            "chi and the modal damping at level 1, R~; Jenkins and Bouc-Wen: the slip "
+            "scale, and Bouc-Wen's alpha), the "
             "viscous damping and the stuck frequency, plus the FE realization of the cause "
             "the one judge selects (the same choice as diagnose --case: fit test, cost per "
             "cause, held-out gain > 1); the glue stiffness K_T by its profile (grip "
@@ -44,7 +46,8 @@ def register(subparsers) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--case", required=True, metavar="NAME|FILE",
                         help="the FE model: a shipped case or a case file (.toml) whose "
-                             "joints are iwan4 and which names its measured data")
+                             "joints have one law and a kt and which names its measured "
+                             "data")
     parser.add_argument("--data", metavar="FILE", default=None,
                         help="measured-data CSV (default: the case's measured data)")
     parser.add_argument("--mode", type=int, default=None,
