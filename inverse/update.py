@@ -81,6 +81,14 @@ AT_BOUND_STEPS = 1e-4
 #: Difference step (units of each parameter's step) of the Jacobian that re-takes a
 #: decrement over the tolerance (module docstring).
 CHECK_STEP = 1e-3
+#: A parameter whose linear effect over its whole box (``|J_j|`` times the box width,
+#: at most :data:`FLAT_REACH_STEPS` steps) moves the residuals by less than this (noise
+#: units, root sum of squares) is flat where the fit stopped: its Jacobian column is
+#: the simulation's round-off over the difference step, which the column scaling of
+#: :func:`inverse.decrement.gauss_newton_decrement` would blow up to a direction of its
+#: own carrying a random share ``~ chi2 / n`` of the misfit (module docstring).
+FLAT_EFFECT = 1e-3
+FLAT_REACH_STEPS = 1e4
 
 
 class InternalError(RuntimeError):
@@ -197,7 +205,9 @@ class Fit:
     ``success`` (the optimizer's, and no failed simulation at the optimum) with its
     ``status`` and ``message``, ``converged`` with its Gauss-Newton ``decrement``
     (chi2 units; module docstring), ``feasible``: no failed simulation at the optimum
-    (a fit that is feasible but not converged stopped short of it)."""
+    (a fit that is feasible but not converged stopped short of it), ``flat``: the free
+    parameters with no effect where it stopped (:data:`FLAT_EFFECT`: not determined
+    there, held out of the decrement)."""
 
     values: dict
     free: tuple
@@ -214,6 +224,7 @@ class Fit:
     decrement: float = math.inf
     status: int | None = None
     feasible: bool = True
+    flat: tuple = ()
 
     @property
     def k(self) -> int:
@@ -247,7 +258,7 @@ class Fit:
                 "misfit_scale": self.misfit_scale, "evaluations": self.nfev,
                 "seconds": self.seconds, "success": self.success,
                 "converged": self.converged, "decrement": self.decrement,
-                "status": self.status,
+                "status": self.status, "flat": list(self.flat),
                 "failed_simulations": self.failed_simulations,
                 "at_bound": {f: self.at_bound.get(f, False) for f in self.free},
                 "std_error": {f: self.std_error(f) for f in self.free}}
@@ -276,17 +287,24 @@ def _covariance(J: np.ndarray, held: np.ndarray) -> np.ndarray | None:
     return cov
 
 
-def _decrement(J, r, active_mask, free, side) -> float:
+def _flat(J, width) -> np.ndarray:
+    """The columns of ``J`` whose linear effect over the box is below :data:`FLAT_EFFECT`."""
+    return np.linalg.norm(J, axis=0) * np.minimum(width, FLAT_REACH_STEPS) < FLAT_EFFECT
+
+
+def _decrement(J, r, active_mask, free, side, width) -> float:
     """The Gauss-Newton decrement (module docstring) from the Jacobian ``J`` (N, k) of the
     residuals ``r`` in the optimizer's coordinates, the parameters at a bound (``side``,
-    or the optimizer's ``active_mask``) held where the gradient pushes outward."""
+    or the optimizer's ``active_mask``) held where the gradient pushes outward, and the
+    flat ones (:data:`FLAT_EFFECT`; ``width``: each box's width in the optimizer's
+    coordinates) held."""
     J, r = np.asarray(J, float), np.asarray(r, float)
     if not (np.all(np.isfinite(J)) and np.all(np.isfinite(r))):
         return math.inf
     g = J.T @ r                                # half the gradient of chi2, per u
     lower = np.array([side[f] == "lower" for f in free]) | (active_mask < 0)
     upper = np.array([side[f] == "upper" for f in free]) | (active_mask > 0)
-    held = (lower & (g > 0)) | (upper & (g < 0))
+    held = (lower & (g > 0)) | (upper & (g < 0)) | _flat(J, width)
     return float(gauss_newton_decrement(J.T[None], r[None], held[None])[0])
 
 
@@ -387,14 +405,16 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
     cov = _covariance(J, np.array([bool(side[f]) for f in free]))
     r = res.fun
     ok = bool(np.all(np.abs(r) < _FAILED))
-    dec, nfev = _decrement(res.jac, r, res.active_mask, free, side), int(res.nfev)
+    width, Jd = hi - lo, res.jac
+    dec, nfev = _decrement(Jd, r, res.active_mask, free, side, width), int(res.nfev)
     if ok and dec > DECREMENT_TOL:          # the optimizer's Jacobian may carry round-off
-        Jc, extra = _check_jacobian(funs, res.x, r, lo, hi)
-        dec, nfev = _decrement(Jc, r, res.active_mask, free, side), nfev + extra
+        Jd, extra = _check_jacobian(funs, res.x, r, lo, hi)
+        dec, nfev = _decrement(Jd, r, res.active_mask, free, side, width), nfev + extra
+    flat = tuple(f for f, b in zip(free, _flat(np.asarray(Jd, float), width)) if b)
     return Fit(values=best, free=free, chi2=float(r @ r), n=r.size, cov=cov,
                nfev=nfev, seconds=time.perf_counter() - t0,
                success=bool(res.success) and ok,
                message=str(res.message), at_bound=side,
                failed_simulations=problem.failures - failed0,
                converged=ok and dec <= ACCEPT_TOL, decrement=dec, status=int(res.status),
-               feasible=ok)
+               feasible=ok, flat=flat)

@@ -396,3 +396,30 @@ def test_a_cause_whose_optimum_fails_from_a_cold_start_is_counted_not_fatal(monk
     fe = report(data, mask, s)["fe"]
     assert fe["failures"]["fits"] == 1 and fe["candidate"] != "geometric-hardening"
     assert "cold start" in fe["evidence"]["geometric-hardening"]["why_not"]
+
+
+def test_a_joint_that_works_nothing_under_misfit_is_held_not_unconverged():
+    """The FE benchmark's draw 6104 (a hardening the softening base model cannot follow,
+    chi2 1629): every start of the base fit ends with the joints slipped through at every
+    level, chi and ln |kappa1| B~ without effect. Before, the column scaling of the
+    decrement blew their round-off columns up to directions of their own (decrement 26
+    to 422 chi2 units: 'not converged' from every start, so no cause could be named);
+    now they are flat (inverse.update.FLAT_EFFECT), held, and the fit converged: at the
+    optimum of zeta_v and f0 with the joint held where it stopped (a second fit)."""
+    from cases.double_beam.fe_levels import DoubleBeamLevels
+    from cases.double_beam.fe_synthetic import draw_case
+    from feloop.levels import Simulator
+    from feloop.select import FIT_TOL, base_parameters, fe_noise
+
+    data = draw_case(6104, "geometric-hardening").data
+    fe = DoubleBeamLevels.from_data(data)
+    mask = np.ones(len(data), dtype=bool)
+    P, starts = base_parameters(data, mask, fe)
+    prob = UpdateProblem(Simulator(fe), data.omega2, data.zeta, fe_noise(data)[1], mask, P)
+    base = fit(prob, fe.base_parameters, start=starts[0], tol=FIT_TOL)
+    held = fit(prob, ("zeta_v", "f0_hz"), start=base.values, tol=FIT_TOL)
+    assert base.chi2 > 1000.0 and {"chi", "ln_dc1"} <= set(base.flat)
+    assert base.converged and held.converged and held.flat == ()
+    assert base.chi2 == pytest.approx(held.chi2, rel=1e-8)
+
+
