@@ -23,8 +23,9 @@ halves ``ds`` (down to ``ds_min``, then :class:`fe.newton_path.SteadyStateError`
 Folds (turning points in ``p``) are detected by a sign change of the ``mu`` component of
 the tangent between two points and located by Brent's method on the arclength ``s`` from
 the earlier point: ``f(s) = t_mu(s)``, each value from the corrector (1) at ``s`` and the
-tangent (2) there, until ``|t_mu| <= fold_tol`` (at a fold ``t_mu = 0`` exactly; the
-frequency error is then ``O(fold_tol^2)`` times the branch curvature).
+tangent (2) there, to ``1e-9 ds`` in ``s`` (the parameter at the fold is stationary in
+``s``: its error is ``O(1e-18 ds^2)`` times the branch curvature); ``Fold.residual_tangent``
+is the ``|t_mu|`` left.
 """
 from __future__ import annotations
 
@@ -44,7 +45,7 @@ class ContinuationSettings:
     """Arclength steps ``ds`` (first), ``ds_min``, ``ds_max`` in the scaled unknowns;
     corrector tolerance ``tol`` on the Newton update (scaled) and ``max_iter``;
     ``target_iter`` of the step control; ``max_turn`` (rad) of the tangent per step;
-    ``max_steps``; ``fold_tol`` on the tangent's parameter component at a fold."""
+    ``max_steps``."""
 
     ds: float = 0.02
     ds_min: float = 1e-7
@@ -54,7 +55,6 @@ class ContinuationSettings:
     target_iter: int = 4
     max_turn: float = 0.35
     max_steps: int = 2000
-    fold_tol: float = 1e-10
 
     def __post_init__(self):
         if not 0 < self.ds_min <= self.ds <= self.ds_max:
@@ -152,7 +152,7 @@ def _locate_fold(f: _Scaled, y0, t0, ds, settings):
     if fa * fb > 0:
         raise SteadyStateError("fold", "tangent's parameter component has no sign change",
                                solver="continuation")
-    s = brentq(t_mu, a, b, xtol=1e-14 * ds, rtol=4 * np.finfo(float).eps, maxiter=100)
+    s = brentq(t_mu, a, b, xtol=1e-9 * ds, rtol=4 * np.finfo(float).eps, maxiter=100)
     if s not in cache:
         t_mu(s)
     return cache[s]

@@ -19,7 +19,9 @@ the joints' departure from their stuck stiffness (paper eq. 25). Jacobian ``dG/d
   here);
 * ``"fd"`` (automatic otherwise): finite differences of the whole periodic march, one
   march per real coefficient (all joints at once, since they are independent), central
-  (``fd_central``) or forward, step ``fd_step`` times each joint's slip amplitude.
+  (``fd_central``) or forward, step ``fd_step`` times each joint's slip amplitude, each
+  march as many periods as the unperturbed one (one when its first period already
+  repeated: a Masing law, a Jenkins bank, a law without memory).
   This is the consistent tangent of the marched path, memory of past reversals
   included;
 * ``"tangent"``: ``P diag(k_t) E - K_T I`` from the step's tangent along the period:
@@ -139,7 +141,7 @@ class LawHarmonics:
         if self.jacobian == "tangent":
             JF = np.einsum("cn,jn,nd->jcd", self.P, kt, self.E)
         else:
-            JF = self._fd(s_t, F, periods)
+            JF = self._fd(s_t, F, 1 if periods == 2 else periods)
         return G, JF - self.K_T[:, None, None] * self._eye, amp
 
     def _fd(self, s_t, F, periods):

@@ -68,3 +68,31 @@ def sdof(omega0: float, zeta: float, k_joint: float = 0.0, mass: float = 1.0) ->
                         K=np.array([[mass * omega0 ** 2]]),
                         C=np.array([[2.0 * zeta * omega0 * mass]]), G=np.eye(1),
                         K_T=np.array([float(k_joint)]), n_modes=1)
+
+
+class HardenedIwan(JointLaw):
+    """Four-parameter Iwan joints (:class:`joints.describing.IwanJoints`) in parallel with
+    a cubic spring ``k3 s^3``: hysteresis with memory, and a hardening that folds."""
+
+    name = "iwan+cubic"
+
+    def __init__(self, iwan, k3: float):
+        self.iwan, self.k3 = iwan, float(k3)
+        self.K_T = iwan.K_T
+
+    @property
+    def slip_scale(self):
+        return self.iwan.slip_scale
+
+    def initial_state(self):
+        return self.iwan.initial_state()
+
+    def step(self, slip, state):
+        F, kt, new = self.iwan.step(slip, state)
+        s = np.asarray(slip, dtype=float)
+        return F + self.k3 * s ** 3, kt + 3.0 * self.k3 * s ** 2, new
+
+    def describing_derivative(self, amplitude):
+        k_in, k_q, dk_in, dk_q = self.iwan.describing_derivative(amplitude)
+        A = np.asarray(amplitude, dtype=float)
+        return k_in + 0.75 * self.k3 * A ** 2, k_q, dk_in + 1.5 * self.k3 * A, dk_q
