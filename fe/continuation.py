@@ -18,7 +18,8 @@ singular. The tangent at the new point solves
 Step size: after a corrector of ``m`` iterations ``ds <- ds clip(m* / m, 1/2, 2)``
 (``m*`` the target count), capped at ``ds_max``; a corrector that fails, or lands at a
 point whose tangent turns by more than ``max_turn`` (rad) — a jump to another branch —
-halves ``ds`` (down to ``ds_min``, then :class:`fe.newton_path.SteadyStateError`).
+halves ``ds`` (a turn is accepted once ``ds <= corner_ds``: a corner of a piecewise-smooth
+branch, e.g. a contact starting at one AFT sample, that no step resolves) (down to ``ds_min``, then :class:`fe.newton_path.SteadyStateError`).
 
 Folds (turning points in ``p``) are detected by a sign change of the ``mu`` component of
 the tangent between two points and located by Brent's method on the arclength ``s`` from
@@ -44,7 +45,8 @@ __all__ = ["ContinuationSettings", "Fold", "Branch", "continue_branch", "branch_
 class ContinuationSettings:
     """Arclength steps ``ds`` (first), ``ds_min``, ``ds_max`` in the scaled unknowns;
     corrector tolerance ``tol`` on the Newton update (scaled) and ``max_iter``;
-    ``target_iter`` of the step control; ``max_turn`` (rad) of the tangent per step;
+    ``target_iter`` of the step control; ``max_turn`` (rad) of the tangent per step
+    (not checked at ``ds <= corner_ds``);
     ``max_steps``."""
 
     ds: float = 0.02
@@ -54,6 +56,7 @@ class ContinuationSettings:
     max_iter: int = 12
     target_iter: int = 4
     max_turn: float = 0.35
+    corner_ds: float = 1e-5
     max_steps: int = 2000
 
     def __post_init__(self):
@@ -235,7 +238,8 @@ def _step(f, y, t, ds, settings):
         try:
             y1, it, J = _corrector(f, y, t, ds, y + ds * t, settings)
             t1 = branch_tangent(J, t)
-            if np.arccos(np.clip(t1 @ t, -1.0, 1.0)) <= settings.max_turn:
+            if (ds <= settings.corner_ds
+                    or np.arccos(np.clip(t1 @ t, -1.0, 1.0)) <= settings.max_turn):
                 return y1, t1, it, ds
             reason = "tangent turned too far"
         except (RuntimeError, np.linalg.LinAlgError) as exc:
