@@ -6,7 +6,9 @@ stability.
 AFT; :func:`fe.frc.forced_response`) by pseudo-arclength continuation over the frequency
 range, locates the folds and judges each point by Hill's method. Per point: frequency_hz,
 amplitude (first harmonic of x, m), peak (half peak-to-peak of x, m), the largest Floquet
-multiplier modulus and ``stable``; ``--json`` prints the curves.
+multiplier modulus and ``stable``; ``--json`` prints the curves. ``--case NAME|FILE``
+takes a case's jointed model instead (driven and observed at its drive DOF; ``--path
+bank``: its Jenkins banks with the compiled AFT, ``exact``: its law marched by its step).
 """
 from __future__ import annotations
 
@@ -38,6 +40,17 @@ def register(subparsers) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--force", type=float, nargs="+", required=True, metavar="F",
                         help="drive amplitudes (N), one curve each")
+    parser.add_argument("--case", default=None, metavar="NAME|FILE",
+                        help="a case's jointed model instead of the one-DOF oscillator "
+                             "(shipped case or case file; driven and observed at its drive "
+                             "DOF; the one-DOF options are then not used)")
+    parser.add_argument("--mode", type=int, default=None,
+                        help="with --case: 1-based stuck-joint mode whose frequency sets "
+                             "the default range (default: the case's studied mode)")
+    parser.add_argument("--path", choices=("bank", "exact"), default="bank",
+                        help="with --case: the joints as Jenkins banks (compiled AFT, exact "
+                             "Jacobian) or the exact law marched by its step (finite-"
+                             "difference Jacobian, slow for many joints)")
     parser.add_argument("--mass", type=float, default=1.0, help="mass m (kg)")
     parser.add_argument("--stiffness", type=float, default=2000.0,
                         help="linear spring k in parallel with the joint (N/m)")
@@ -91,8 +104,24 @@ def _check(args):
             raise ValueError(f"--range must satisfy 0 < LO < HI, got {lo} {hi}")
 
 
+def _case_model(args):
+    """A case's reduced model, joints (bank or law), unit load and observed row."""
+    from cli.model_options import case_of
+
+    if args.mode is not None and args.mode < 1:
+        raise ValueError(f"--mode must be >= 1, got {args.mode}")
+    case = case_of(args).nonlinear_model(mode=args.mode)
+    law = case.bank if args.path == "bank" else case.law()
+    if law is None:
+        raise ValueError(f"{case.name}: no Jenkins banks for law {case.law_name} (use "
+                         f"--path exact)")
+    return case, law
+
+
 def run(args) -> int:
     _check(args)
+    if args.case is not None:
+        return _run_case(args)
     from fe.frc import FRCSettings, forced_response
     from fe.newton_path import SteadyStateError
 
@@ -125,6 +154,12 @@ def run(args) -> int:
           f"chi = {p.chi:g}, K_T = {p.K_T:g} N/m, F_S = {p.F_S:g} N, beta = {p.beta:g} "
           f"(phi_max = {p.phi_max:.4g} m), zeta = {args.zeta:g}; stuck {f0:.5g} Hz; "
           f"harmonics {list(settings.harmonics)}, {args.n_time} samples; {elapsed:.1f} s")
+    _print_curves(curves)
+    return 0
+
+
+def _print_curves(curves) -> None:
+    """The text table of every curve."""
     for c in curves:
         folds = ", ".join(f"{f['frequency_hz']:.6g} Hz" for f in c["folds"]) or "none"
         print(f"force {c['force_N']:g} N: {len(c['points'])} points, folds: {folds}")
@@ -132,4 +167,42 @@ def run(args) -> int:
         for q in c["points"]:
             print(f"  {q['frequency_hz']:12.6f}  {q['amplitude']:12.5e}  {q['peak']:12.5e}"
                   f"  {q['max_multiplier']:8.5f}  {'yes' if q['stable'] else 'no'}")
+
+
+def _run_case(args) -> int:
+    """``--case``: the same curves for a case's jointed model at its drive DOF."""
+    from fe.frc import FRCSettings, forced_response
+    from fe.newton_path import SteadyStateError
+
+    case, law = _case_model(args)
+    model = case.model
+    f0 = float(model.omega[case.mode - 1]) / (2 * math.pi)
+    lo, hi = args.range if args.range is not None else (0.9 * f0, 1.05 * f0)
+    settings = FRCSettings(harmonics=tuple(range(1, args.harmonics + 1, 2)),
+                           n_time=args.n_time)
+    observe = np.asarray(model.basis[case.response_dof], dtype=float)
+    curves = []
+    t0 = time.perf_counter()
+    for F in args.force:
+        try:
+            r = forced_response(model, law, F * case.load(), (2 * math.pi * lo,
+                                                              2 * math.pi * hi),
+                                observe=observe, settings=settings)
+        except SteadyStateError as exc:
+            raise ValueError(f"force {F:g} N: {exc}") from None
+        curves.append({"force_N": F, "points": r.to_points(),
+                       "folds": [{"frequency_hz": f["frequency_hz"], "amplitude": f["amplitude"],
+                                  "peak": f["peak"]} for f in r.folds]})
+    elapsed = time.perf_counter() - t0
+    head = {"case": case.name, "mode": case.mode, "path": args.path,
+            "stuck_frequency_hz": f0, "drive_dof": case.drive_dof,
+            "response_dof": case.response_dof, "harmonics": list(settings.harmonics),
+            "n_time": args.n_time}
+    if args.json:
+        print_json({"model": head, "curves": curves, "elapsed_s": elapsed})
+        return 0
+    print(f"{case.name}, mode {case.mode} (stuck {f0:.5g} Hz): driven and observed at DOF "
+          f"{case.response_dof}, joints: {args.path}; harmonics {list(settings.harmonics)}, "
+          f"{args.n_time} samples; {elapsed:.1f} s")
+    _print_curves(curves)
     return 0
