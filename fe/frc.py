@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fe.continuation import ContinuationSettings, continue_branch
+from fe.floquet import floquet_multipliers, period_map_monodromy, tangent_monodromy
 from fe.hb_forced import ForcedBalance
 from fe.hill import hill_stability
 from fe.reduction import ReducedModel
@@ -25,13 +26,23 @@ __all__ = ["FRCSettings", "ForcedResponse", "forced_response"]
 @dataclass(frozen=True)
 class FRCSettings:
     """Harmonics, AFT samples per period, joint Jacobian (:class:`fe.law_aft.LawHarmonics`),
-    continuation settings, and whether to judge stability (Hill)."""
+    continuation settings, whether to judge stability (Hill), and the Floquet multipliers
+    of the Newmark period map as well (``floquet``: None, ``"period_map"`` or
+    ``"tangent"``, :mod:`fe.floquet`, ``floquet_steps`` per period; the tangent route
+    omits a hysteretic law's memory)."""
 
     harmonics: tuple = (1, 3, 5)
     n_time: int = 128
     jacobian: str = "auto"
     continuation: ContinuationSettings = field(default_factory=ContinuationSettings)
     stability: bool = True
+    floquet: str | None = None
+    floquet_steps: int = 1024
+
+    def __post_init__(self):
+        if self.floquet not in (None, "period_map", "tangent"):
+            raise ValueError(f"floquet must be None, 'period_map' or 'tangent', got "
+                             f"{self.floquet!r}")
 
 
 @dataclass
@@ -45,7 +56,8 @@ class ForcedResponse:
     amplitude : (n,) first-harmonic amplitude of the observed coordinate (m).
     peak : (n,) its half peak-to-peak over the period (m).
     max_multiplier : (n,) largest Floquet multiplier modulus (Hill; NaN without stability).
-    stable : (n,) bool.
+    stable : (n,) bool (Hill).
+    floquet_multiplier : (n,) the same from the Newmark period map (NaN unless asked).
     folds : list of dict (``omega``, ``amplitude``, ``peak``, ``after``).
     harmonics : harmonics kept.
     """
@@ -58,6 +70,7 @@ class ForcedResponse:
     stable: np.ndarray
     folds: list
     harmonics: np.ndarray
+    floquet_multiplier: np.ndarray = None
 
     @property
     def frequency_hz(self) -> np.ndarray:
@@ -66,10 +79,17 @@ class ForcedResponse:
     def to_points(self) -> list[dict]:
         """One dict per point: ``frequency_hz``, ``amplitude``, ``peak``,
         ``max_multiplier``, ``stable`` (JSON-ready)."""
-        return [{"frequency_hz": float(f), "amplitude": float(a), "peak": float(p),
+        fl = (np.full(self.omega.size, np.nan) if self.floquet_multiplier is None
+              else self.floquet_multiplier)
+        out = []
+        for f, a, p, m, s, q in zip(self.frequency_hz, self.amplitude, self.peak,
+                                    self.max_multiplier, self.stable, fl):
+            d = {"frequency_hz": float(f), "amplitude": float(a), "peak": float(p),
                  "max_multiplier": float(m), "stable": bool(s)}
-                for f, a, p, m, s in zip(self.frequency_hz, self.amplitude, self.peak,
-                                         self.max_multiplier, self.stable)]
+            if np.isfinite(q):
+                d["floquet_multiplier"] = float(q)
+            out.append(d)
+        return out
 
 
 def _observed(balance: ForcedBalance, X: np.ndarray, c: np.ndarray):
@@ -138,10 +158,16 @@ def forced_response(model: ReducedModel, law, load, omega_range, observe=None,
     mods = np.full(b.p.size, np.nan)
     if settings.stability:
         mods = np.array([hill_stability(bal, x, w).max_modulus for x, w in zip(b.x, b.p)])
+    floq = np.full(b.p.size, np.nan)
+    if settings.floquet is not None:
+        route = period_map_monodromy if settings.floquet == "period_map" else tangent_monodromy
+        floq = np.array([np.abs(floquet_multipliers(route(bal, x, w, settings.floquet_steps))
+                                ).max() for x, w in zip(b.x, b.p)])
     folds = []
     for f in b.folds:
         fa, fp = _observed(bal, f.x[None, :], c)
         folds.append({"omega": f.p, "frequency_hz": f.p / (2 * np.pi),
                       "amplitude": float(fa[0]), "peak": float(fp[0]), "after": f.after})
     return ForcedResponse(omega=b.p, x=b.x, amplitude=amp, peak=peak, max_multiplier=mods,
-                          stable=mods < 1.0, folds=folds, harmonics=bal.harmonics)
+                          stable=mods < 1.0, folds=folds, harmonics=bal.harmonics,
+                          floquet_multiplier=floq)

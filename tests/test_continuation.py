@@ -133,3 +133,15 @@ def test_fd_jacobian_of_the_march_matches_exact_ones():
     assert exact.jacobian == "bank"
     assert np.max(np.abs(Ge - Gg)) < 1e-12 * np.abs(Ge).max()
     assert np.max(np.abs(Je - Jg)) < 1e-5 * np.abs(Je).max()
+
+
+def test_descending_direction_passes_the_same_folds():
+    def res(x, p):
+        return np.array([x[0] ** 3 - 3 * x[0] - p]), np.array([[3 * x[0] ** 2 - 3]]), \
+            np.array([-1.0])
+
+    b = continue_branch(res, np.array([2.3]), 5.0, (-5.0, 5.0),
+                        ContinuationSettings(ds=0.1, ds_max=0.5), direction=-1)
+    assert [round(f.p, 12) for f in b.folds] == [-2.0, 2.0]
+    assert b.p[0] == 5.0 and b.p[-1] == pytest.approx(-5.0, abs=1e-14)
+    assert b.x[-1, 0] < -2.0                          # ends on the lower root

@@ -128,3 +128,27 @@ def test_softening_iwan_first_harmonic_is_the_describing_function():
         ref = solve_hb_exact(model, [p], np.array([0.03]), b.p[i]).slip_amplitude[0]
         errs.append(abs(amp[i] - ref) / ref)
     assert max(errs) < 1e-4                                       # measured 3.5e-5
+
+
+def test_iwan_oscillator_first_harmonic_curve_never_folds_on_a_grid():
+    """Why the folds above need the cubic spring: on one DOF, ``(k + k_in(A) - w^2)^2 +
+    (2 zeta w0 w + k_q(A))^2 = F^2/A^2`` with the exact Iwan describing function gives
+    ``w^2 = k + k_in -+ sqrt(F^2/A^2 - D^2)`` (``D`` the quadrature term at the backbone
+    frequency), and on a grid of joint shares, beta, chi, damping and force (through
+    macro-slip) the lower branch rises and the upper one falls monotonically in ``A``:
+    one response per frequency, no fold (the friction damping grows with the softening)."""
+    folds = 0
+    for share, beta, chi in [(0.5, 1.0, -0.5), (0.9, 1.0, -0.5), (0.5, 100.0, -0.5),
+                             (0.9, 100.0, -0.1), (0.5, 0.1, -0.9), (0.97, 10.0, -0.5)]:
+        p = IwanParameters(chi, share, 0.01, beta)
+        A = np.geomspace(0.01, 1e4, 8000) * p.phi_max
+        k_in, k_q = IwanJoints(p, 1).describing(A[:, None])
+        kap = (1.0 - share) + k_in[:, 0]
+        for zeta in (1e-4, 1e-3, 1e-2):
+            D = 2 * zeta * np.sqrt(kap) + k_q[:, 0]
+            for F in 0.01 * np.geomspace(0.3, 30, 60):
+                ok = F / A > D
+                s = np.sqrt(F ** 2 / A[ok] ** 2 - D[ok] ** 2)
+                w2 = np.concatenate([(kap[ok] - s), (kap[ok] + s)[::-1]])
+                folds += int(np.count_nonzero(np.diff(np.sign(np.diff(w2)))))
+    assert folds == 0
