@@ -62,16 +62,21 @@ def test_frc_one_line_errors(capsys, argv, words):
 def test_frc_case_lumped_against_the_condensed_balance(capsys):
     """``--case lumped``: the curve at the drive DOF against ``fe.harmonic_balance.solve_hb``
     (the slip-condensed multi-harmonic balance of the same Jenkins banks: another
-    formulation, same harmonics and samples)."""
+    formulation, same harmonics and samples); Hill's multiplier against the Newmark
+    period map's (``--floquet period_map``) on the 10-DOF model."""
     from cases.nonlinear_case import build_nonlinear_case
     from fe.harmonic_balance import HBSettings, solve_hb
 
     code, out, _ = run_cli(capsys, "frc", "--case", "lumped", "--force", "100",
-                           "--harmonics", "3", "--n-time", "64", "--json")
+                           "--harmonics", "3", "--n-time", "64", "--floquet", "period_map",
+                           "--json")
     assert code == 0
     d = json.loads(out)
     assert d["model"]["case"] == "lumped" and d["model"]["mode"] == 2
     pts = d["curves"][0]["points"]
+    hill = np.array([p["max_multiplier"] for p in pts])
+    floq = np.array([p["floquet_multiplier"] for p in pts])
+    assert np.all(hill < 1.0) and np.max(np.abs(hill - floq)) < 1e-5   # measured 4.1e-7
     case = build_nonlinear_case("lumped")
     st = HBSettings(n_harmonics=3, n_time=64, odd_only=True)
     errs = []

@@ -66,6 +66,11 @@ def register(subparsers) -> None:
     parser.add_argument("--harmonics", type=int, default=5,
                         help="highest odd harmonic H (harmonics 1, 3, ..., H)")
     parser.add_argument("--n-time", type=int, default=128, help="AFT samples per period")
+    parser.add_argument("--floquet", choices=("period_map", "tangent"), default=None,
+                        help="also the largest Floquet multiplier of the Newmark period map "
+                             "at every point (period_map: central differences of the "
+                             "nonlinear map, 1024 steps; tangent: the scheme linearized on "
+                             "the orbit, which omits a hysteretic joint's memory)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.set_defaults(func=run)
 
@@ -129,7 +134,7 @@ def run(args) -> int:
     f0 = float(model.omega[0]) / (2 * math.pi)
     lo, hi = args.range if args.range is not None else (0.6 * f0, 1.3 * f0)
     settings = FRCSettings(harmonics=tuple(range(1, args.harmonics + 1, 2)),
-                           n_time=args.n_time)
+                           n_time=args.n_time, floquet=args.floquet)
     curves = []
     t0 = time.perf_counter()
     for F in args.force:
@@ -163,10 +168,13 @@ def _print_curves(curves) -> None:
     for c in curves:
         folds = ", ".join(f"{f['frequency_hz']:.6g} Hz" for f in c["folds"]) or "none"
         print(f"force {c['force_N']:g} N: {len(c['points'])} points, folds: {folds}")
-        print("  frequency_hz    amplitude_m       peak_m   max|mu|  stable")
+        floq = any("floquet_multiplier" in q for q in c["points"])
+        print("  frequency_hz    amplitude_m       peak_m   max|mu|  stable"
+              + ("  floquet|mu|" if floq else ""))
         for q in c["points"]:
             print(f"  {q['frequency_hz']:12.6f}  {q['amplitude']:12.5e}  {q['peak']:12.5e}"
-                  f"  {q['max_multiplier']:8.5f}  {'yes' if q['stable'] else 'no'}")
+                  f"  {q['max_multiplier']:8.5f}  {'yes' if q['stable'] else 'no ':>6s}"
+                  + (f"  {q['floquet_multiplier']:11.5f}" if floq else ""))
 
 
 def _run_case(args) -> int:
@@ -179,7 +187,7 @@ def _run_case(args) -> int:
     f0 = float(model.omega[case.mode - 1]) / (2 * math.pi)
     lo, hi = args.range if args.range is not None else (0.9 * f0, 1.05 * f0)
     settings = FRCSettings(harmonics=tuple(range(1, args.harmonics + 1, 2)),
-                           n_time=args.n_time)
+                           n_time=args.n_time, floquet=args.floquet)
     observe = np.asarray(model.basis[case.response_dof], dtype=float)
     curves = []
     t0 = time.perf_counter()
