@@ -58,6 +58,7 @@ COMMANDS = [
     "update",
     "loop",
     "ringdown",
+    "frc",
 ]
 
 #: A command-line word that is a number, not an option: argparse's own pattern misses
