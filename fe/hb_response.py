@@ -27,7 +27,6 @@ Many force-route problems at once: :mod:`fe.hb_batch`. SI units: rad/s, m, N.
 """
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 
 import numpy as np

@@ -22,7 +22,6 @@ from feloop.levels import level_entries
 from feloop.tie import tie_statement
 from feloop.update_text import LABEL, format_text, markdown
 from inverse.fe_selection import fit_test_of
-from inverse.iwan_modal import kappa_ratio
 from inverse.profile import bounded_interval
 from runs.jsonio import to_jsonable
 

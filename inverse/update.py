@@ -49,7 +49,7 @@ hair inside its bound with the gradient pushing on), and ``success`` is True for
 simulator's round-off (steady states to 1e-12, warm-started) into ``g`` at 1e-6 /
 1e-12 amplification, which alone can lift the decrement over the tolerance at an
 optimum; so a decrement over the tolerance is taken again with central differences of
-:data:`CHECK_STEP` = 1e-3 step (``2k`` more simulations, only then; ``O(h^2)`` = 1e-6
+:data:`inverse.decrement.CHECK_STEP` = 1e-3 step (``2k`` more simulations, only then; ``O(h^2)`` = 1e-6
 truncation, round-off amplified 1e3 times less), and that one decides.
 
 Noise: the :class:`NoiseModel` given to the problem, in the FE loop the totals of the one
@@ -67,7 +67,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from inverse.decrement import ACCEPT_TOL, DECREMENT_TOL, gauss_newton_decrement
+from inverse.decrement import (ACCEPT_TOL, DECREMENT_TOL, central_jacobian,
+                               fit_decrement, flat_columns)
 
 __all__ = ["SIMULATION_FAILURES", "InternalError", "Parameter", "NoiseModel", "UpdateProblem",
            "Fit", "fit"]
@@ -78,19 +79,6 @@ SIMULATION_FAILURES = (RuntimeError, ValueError, ArithmeticError)
 _FAILED = 1e4   # residual of a failed simulation, in noise units (counted, never reported)
 #: A free parameter this close to a bound (in units of its step) is at the bound.
 AT_BOUND_STEPS = 1e-4
-#: Difference step (units of each parameter's step) of the Jacobian that re-takes a
-#: decrement over the tolerance (module docstring).
-CHECK_STEP = 1e-3
-#: A parameter whose linear effect over its whole box (``|J_j|`` times the box width,
-#: at most :data:`FLAT_REACH_STEPS` steps) moves the residuals by less than this (noise
-#: units, root sum of squares) is flat where the fit stopped: its Jacobian column is
-#: the simulation's round-off over the difference step, which the column scaling of
-#: :func:`inverse.decrement.gauss_newton_decrement` would blow up to a direction of its
-#: own carrying a random share ``~ chi2 / n`` of the misfit (module docstring).
-FLAT_EFFECT = 1e-3
-FLAT_REACH_STEPS = 1e4
-
-
 class InternalError(RuntimeError):
     """A failure of the program (inconsistent bounds, an optimizer error), not of the
     input: the CLI reports it as an internal failure (exit status 1)."""
@@ -206,7 +194,7 @@ class Fit:
     ``status`` and ``message``, ``converged`` with its Gauss-Newton ``decrement``
     (chi2 units; module docstring), ``feasible``: no failed simulation at the optimum
     (a fit that is feasible but not converged stopped short of it), ``flat``: the free
-    parameters with no effect where it stopped (:data:`FLAT_EFFECT`: not determined
+    parameters with no effect where it stopped (:data:`inverse.decrement.FLAT_EFFECT`: not determined
     there, held out of the decrement)."""
 
     values: dict
@@ -287,47 +275,6 @@ def _covariance(J: np.ndarray, held: np.ndarray) -> np.ndarray | None:
     return cov
 
 
-def _flat(J, width) -> np.ndarray:
-    """The columns of ``J`` whose linear effect over the box is below :data:`FLAT_EFFECT`."""
-    return np.linalg.norm(J, axis=0) * np.minimum(width, FLAT_REACH_STEPS) < FLAT_EFFECT
-
-
-def _decrement(J, r, active_mask, free, side, width) -> float:
-    """The Gauss-Newton decrement (module docstring) from the Jacobian ``J`` (N, k) of the
-    residuals ``r`` in the optimizer's coordinates, the parameters at a bound (``side``,
-    or the optimizer's ``active_mask``) held where the gradient pushes outward, and the
-    flat ones (:data:`FLAT_EFFECT`; ``width``: each box's width in the optimizer's
-    coordinates) held."""
-    J, r = np.asarray(J, float), np.asarray(r, float)
-    if not (np.all(np.isfinite(J)) and np.all(np.isfinite(r))):
-        return math.inf
-    g = J.T @ r                                # half the gradient of chi2, per u
-    lower = np.array([side[f] == "lower" for f in free]) | (active_mask < 0)
-    upper = np.array([side[f] == "upper" for f in free]) | (active_mask > 0)
-    held = (lower & (g > 0)) | (upper & (g < 0)) | _flat(J, width)
-    return float(gauss_newton_decrement(J.T[None], r[None], held[None])[0])
-
-
-def _check_jacobian(funs, u, r, lo, hi, h: float = CHECK_STEP):
-    """Jacobian at ``u`` (residuals ``r``) by central differences of step ``h``
-    (one-sided three-point rule where ``u +- h`` leaves ``[lo, hi]``), ``funs`` giving
-    the residuals of a list of points; and the evaluations it took."""
-    points, side = [], []
-    for j in range(u.size):
-        e = np.zeros(u.size)
-        e[j] = h
-        s = 0.0 if lo[j] <= u[j] - h and u[j] + h <= hi[j] else \
-            (1.0 if u[j] + 2.0 * h <= hi[j] else -1.0)
-        points += [u + e, u - e] if s == 0.0 else [u + s * e, u + 2.0 * s * e]
-        side.append(s)
-    f = funs(points)
-    J = np.zeros((r.size, u.size))
-    for j, s in enumerate(side):
-        a, b = f[2 * j], f[2 * j + 1]
-        J[:, j] = (a - b) / (2.0 * h) if s == 0.0 else (-3.0 * r + 4.0 * a - b) / (2.0 * s * h)
-    return J, 2 * u.size
-
-
 #: scipy's least_squares evaluates its difference Jacobian through a map it is given.
 _MAP = "workers" in inspect.signature(least_squares).parameters
 
@@ -406,11 +353,12 @@ def fit(problem: UpdateProblem, free, start: dict | None = None, fixed: dict | N
     r = res.fun
     ok = bool(np.all(np.abs(r) < _FAILED))
     width, Jd = hi - lo, res.jac
-    dec, nfev = _decrement(Jd, r, res.active_mask, free, side, width), int(res.nfev)
+    bounds = [side[f] for f in free]
+    dec, nfev = fit_decrement(Jd, r, res.active_mask, bounds, width), int(res.nfev)
     if ok and dec > DECREMENT_TOL:          # the optimizer's Jacobian may carry round-off
-        Jd, extra = _check_jacobian(funs, res.x, r, lo, hi)
-        dec, nfev = _decrement(Jd, r, res.active_mask, free, side, width), nfev + extra
-    flat = tuple(f for f, b in zip(free, _flat(np.asarray(Jd, float), width)) if b)
+        Jd, extra = central_jacobian(funs, res.x, r, lo, hi)
+        dec, nfev = fit_decrement(Jd, r, res.active_mask, bounds, width), nfev + extra
+    flat = tuple(f for f, b in zip(free, flat_columns(np.asarray(Jd, float), width)) if b)
     return Fit(values=best, free=free, chi2=float(r @ r), n=r.size, cov=cov,
                nfev=nfev, seconds=time.perf_counter() - t0,
                success=bool(res.success) and ok,
