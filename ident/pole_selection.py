@@ -128,6 +128,9 @@ def roles(f, Hn, p, ps, Wt, n_modes, band_w, peak_w):
     inside = (p.imag >= band_w[0]) & (p.imag <= band_w[1])
     order = np.argsort(-np.where(inside, peak, -np.inf), kind="stable")
     modes = order[:min(int(n_modes), int(inside.sum()))]
+    if modes.size == 0:                     # no pole in the band: no mode, no nuisance
+        none = np.zeros(p.size, bool)
+        return none, none.copy()
     half = -p.real
     apart = np.all(np.abs(p.imag[:, None] - p.imag[None, modes])
                    >= np.maximum(half[:, None], half[None, modes]), axis=1)

@@ -282,3 +282,11 @@ def test_no_false_alarm_where_the_base_fit_could_slip_through():
     r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
                      levels=DoubleBeamLevels.from_data)["fe"]
     assert r["cause"] == "none" and not r["also"] and r["fit_test"]["p_value"] > 0.05
+
+
+def test_a_level_lscf_cannot_identify_is_one_line_not_a_numpy_error():
+    """Draw 6202 (macro-slip): at one level every refined pole leaves the band. The pole
+    selection took the nearest mode of an empty set (numpy: 'zero-size array to
+    reduction operation'); now that level is the identification's own one line."""
+    with pytest.raises(ValueError, match="0 left after the refinement"):
+        draw_case(6202, "macro-slip")
