@@ -17,7 +17,8 @@ and writes one row per mode and level:
 
 * random excitation (``# test = random``): ``excitation`` = the drive RMS,
   ``response_amplitude`` = the mode's response RMS at the drive point
-  (:func:`ident.random_frf.mode_response_rms`); column ``test = random``. A level not
+  (:func:`ident.random_frf.mode_response_rms`: the mode's own FRF times the file's
+  ``force_psd``, else a drive flat over the lines); column ``test = random``. A level not
   stated as random whose FRF looks averaged gets a one-line warning
   (:func:`ident.random_frf.random_signature`).
 
@@ -77,7 +78,7 @@ def _amplitudes(f, mode):
     force = None if s.force is None else float(np.interp(f_d, s.freq_hz, s.force))
     if s.test == "random":
         return s.excitation, mode_response_rms(mode, p, f.quantity, s.freq_hz,
-                                               s.excitation), note
+                                               s.excitation, s.force_psd), note
     if f.control == "response":
         if force is None:
             force = s.excitation / float(np.interp(f_d, s.freq_hz, np.abs(s.frf[:, p])))
