@@ -22,11 +22,11 @@ breaks it), so
 Eq. (1) is the *expected* RMS under a drive of that spectrum; a finite record's drive
 has, in the mode's band, a power that scatters about it by ``1/sqrt(B T)`` (``B`` the
 mode's noise bandwidth, ``T`` the record): measured on the random series of
-``benchmarks/bench_random_chi.py`` (150 s records, ~1.5 Hz bandwidth) the levels' RMS
-by eq. (1) scattered by -3 % .. +4.6 % about the simulated one, and by eq. (2) by
-(see docs/free-decay-and-random.md). Only ratios between levels enter chi, so this
-scatter is what matters, not the absolute value (which the flat assumption sets, and
-with it R).
+``benchmarks/bench_random_chi.py`` (150 s records) the levels' RMS by eq. (1) spanned
+up to 7.1 % about the simulated one within a series, by eq. (2) at most 2.6 %
+(docs/free-decay-and-random.md). Only ratios between levels enter chi, so this scatter
+is what matters, not the absolute value (which the flat assumption sets, and with it
+R).
 
 Signature (:func:`random_signature`): a level not stated as random whose FRF looks
 averaged. A ``coherence`` column belongs to an averaged (random) estimate; otherwise

@@ -135,8 +135,10 @@ def test_random_series_given_as_stepped_sine_gets_one_warning_line(random_series
     bare = load_series(random_series["bare"], n_modes=1)
     assert set(bare.test) == {"stepped-sine"}
     hits = [w for w in bare.warnings if "given as stepped sine" in w]
-    assert len(hits) == len(random_series["bare"])          # one line per level
-    assert all("\n" not in w for w in hits)
+    assert len(hits) == 1 and "\n" not in hits[0]           # one line for the series
+    assert f"{len(random_series['bare'])} of {len(random_series['bare'])} levels" in hits[0]
+    assert "line-to-line noise uniform" in hits[0]
+    assert all("given as stepped sine" in w for w in bare.extra["x_warning"])  # per level
 
 
 def test_stepped_sine_series_with_relative_noise_gets_no_random_warning(tmp_path):
@@ -172,7 +174,8 @@ def test_coherence_column_round_trips_and_names_a_random_test(random_series, tmp
     back = read_frf(paths[0])
     np.testing.assert_array_equal(back.coherence, np.linspace(0.5, 0.99, back.freq_hz.size))
     data = load_series(paths, n_modes=1)
-    assert sum("coherence column" in w for w in data.warnings) == len(paths)
+    assert sum("coherence column" in w for w in data.warnings) == 1      # the series' line
+    assert all("coherence column" in w for w in data.extra["x_warning"])  # every level
     text = paths[0].read_text().splitlines()
     head = text.index(next(t for t in text if t.startswith("freq_hz")))
     row = text[head + 1].split(",")
