@@ -3,7 +3,8 @@
 :func:`simulate_random_series` drives a reduced jointed model with band-limited
 Gaussian force at several RMS levels (:func:`runs.random_test.random_level`, one seed
 per level) and writes one H1 FRF file per level (``# test = random``, ``excitation`` =
-the drive RMS, a ``coherence`` column at the drive point, :mod:`ident.frf_files`) as
+the drive RMS, a ``coherence`` column at the drive point and the drive's
+autospectrum ``force_psd``, :mod:`ident.frf_files`) as
 soon as the level is done; the coherence at every point, the response and slip RMS and
 the seed go into ``level_XX.json`` beside it. A rerun with the same inputs keeps the
 finished levels.
@@ -83,7 +84,8 @@ def simulate_random_series(model: ReducedModel, bank: JointBank, load, outputs, 
         write_frf(path, FRFSet(lvl.freq_hz, lvl.h1, list(points), quantity="receptance",
                                excitation=lvl.drive_rms, reference=str(points[0]),
                                run_order=k, test="random",
-                               coherence=np.clip(lvl.coherence[:, 0], 0.0, 1.0)))
+                               coherence=np.clip(lvl.coherence[:, 0], 0.0, 1.0),
+                               force_psd=lvl.force_psd))
         info = {"hash": digest, "level": k, "drive_rms_N": lvl.drive_rms,
                 "response_rms_m": lvl.response_rms, "slip_rms_m": lvl.slip_rms,
                 "seed": lvl.seed, "n_averages": lvl.n_averages, "duration_s": lvl.duration_s,

@@ -1,7 +1,7 @@
 """The steps of reading an FRF CSV file (:func:`ident.frf_files.read_frf_csv`).
 
 Format in :mod:`ident.frf_files`: the ``# key = value`` lines, the header line
-(``freq_hz``, the ``re_P``/``im_P`` pairs, ``force``, ``coherence``) and the numeric
+(``freq_hz``, the ``re_P``/``im_P`` pairs, ``force``, ``coherence``, ``force_psd``) and the numeric
 table under it, each checked here. Errors are :class:`ident.errors.InputError`
 ``FILE:LINE:COLUMN: message`` (1-based line, column name).
 """
@@ -17,6 +17,9 @@ from ident.errors import InputError, text_file
 from ident.frf_header import (HEADER_KEYS, parse_control, parse_excitation, parse_run_order,
                               parse_test)
 from ident.poles import QUANTITIES
+
+#: The optional per-line columns beside the FRF (:mod:`ident.frf_files`).
+EXTRA_COLUMNS = ("force", "coherence", "force_psd")
 
 
 def _fail(source: str, line: int, column, message: str) -> None:
@@ -75,13 +78,13 @@ def read_text(path: Path, src: str) -> FRFText:
 
 def header_columns(text: FRFText) -> FRFColumns:
     """The header's columns, checked: ``freq_hz`` first, then ``re_P``/``im_P`` pairs
-    (at least one), ``force`` and ``coherence``, no name twice."""
+    (at least one), ``force``, ``coherence`` and ``force_psd``, no name twice."""
     src, header, header_line = text.src, text.header, text.header_line
     if header[0] != "freq_hz":
         _fail(src, header_line, header[0] or 1, "first column must be 'freq_hz'")
     cols = FRFColumns()
     for j, name in enumerate(header[1:], start=1):
-        if name in ("force", "coherence"):
+        if name in EXTRA_COLUMNS:
             if name in cols.extra_col:
                 _fail(src, header_line, name, "duplicate column name")
             cols.extra_col[name] = j
@@ -89,7 +92,8 @@ def header_columns(text: FRFText) -> FRFColumns:
         part, _, label = name.partition("_")
         if part not in ("re", "im") or not label:
             _fail(src, header_line, name,
-                  "unknown column: expected re_<point>, im_<point>, force or coherence")
+                  "unknown column: expected re_<point>, im_<point>, force, coherence or "
+                  "force_psd")
         target = cols.re_col if part == "re" else cols.im_col
         if label in target:
             _fail(src, header_line, name, "duplicate column name")
@@ -153,6 +157,19 @@ def force_and_coherence(src: str, cols: FRFColumns, values: np.ndarray, lines: n
         if bad.size:
             _fail(src, lines[bad[0]], "force", f"force must be > 0 N, got {force[bad[0]]:g}")
     return force, coherence
+
+
+def force_psd_column(src: str, cols: FRFColumns, values: np.ndarray, lines: np.ndarray
+                     ) -> np.ndarray | None:
+    """The ``force_psd`` column (the drive's one-sided autospectrum per line, > 0, in
+    the excitation's unit^2/Hz), None where absent."""
+    if "force_psd" not in cols.extra_col:
+        return None
+    psd = values[:, cols.extra_col["force_psd"]]
+    bad = np.flatnonzero(psd <= 0)
+    if bad.size:
+        _fail(src, lines[bad[0]], "force_psd", f"force_psd must be > 0, got {psd[bad[0]]:g}")
+    return psd
 
 
 def header_keys(text: FRFText) -> dict:

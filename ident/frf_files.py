@@ -23,8 +23,11 @@ stepped-sine series")::
   of the FRF in SI units: m/N, m/s/N or m/s^2/N). The label ``P`` is any text without
   a comma; points keep the order of their ``re_`` columns. One optional ``force``
   column: the measured force amplitude at the reference on that line (N, > 0); one
-  optional ``coherence`` column (0..1, of an averaged estimate: a random test). No
-  other columns.
+  optional ``coherence`` column (0..1, of an averaged estimate: a random test); one
+  optional ``force_psd`` column (a random test: the drive's one-sided autospectrum
+  ``G_ff`` per line, > 0, in the excitation's unit^2/Hz, as the analyser averaged it
+  for the H1; :func:`ident.random_frf.mode_response_rms` takes the mode's response RMS
+  from it). No other columns.
 
 Errors are :class:`ident.errors.InputError` ``FILE:LINE:COLUMN: message`` (1-based line,
 column name), like the measured-data reader.
@@ -49,8 +52,8 @@ from pathlib import Path
 import numpy as np
 
 from ident.errors import InputError
-from ident.frf_csv import (force_and_coherence, header_columns, header_keys, numeric_table,
-                           read_text)
+from ident.frf_csv import (force_and_coherence, force_psd_column, header_columns, header_keys,
+                           numeric_table, read_text)
 from ident.frf_header import CONTROLS, FRF_TESTS, header_values, id_line_values
 from ident.poles import QUANTITIES
 from ident.uff_sets import read_uff_sets
@@ -82,6 +85,8 @@ class FRFSet:
     force : (n,) measured force amplitude at the reference per line (N) or None.
     test : "stepped-sine", "random" or None (not stated: stepped sine).
     coherence : (n,) ordinary coherence at the drive point per line, or None.
+    force_psd : (n,) one-sided autospectrum of the drive per line (excitation unit^2/Hz;
+        a random test), or None.
     """
 
     freq_hz: np.ndarray
@@ -96,6 +101,7 @@ class FRFSet:
     force: np.ndarray | None = None
     test: str | None = None
     coherence: np.ndarray | None = None
+    force_psd: np.ndarray | None = None
 
     def __post_init__(self):
         self.freq_hz = np.asarray(self.freq_hz, float)
@@ -113,7 +119,7 @@ class FRFSet:
             raise ValueError(f"test must be one of {', '.join(FRF_TESTS)}, got {self.test!r}")
         if self.control is not None and self.control not in CONTROLS:
             raise ValueError(f"control must be force or response, got {self.control!r}")
-        for name in ("force", "coherence"):
+        for name in ("force", "coherence", "force_psd"):
             v = getattr(self, name)
             if v is not None:
                 setattr(self, name, np.asarray(v, float))
@@ -138,7 +144,7 @@ def read_frf_csv(path) -> FRFSet:
     keys = header_keys(text)
     return FRFSet(freq, frf, cols.points, keys["quantity"], keys["excitation"],
                   keys["reference"], src, keys["control"], keys["run_order"], force,
-                  keys["test"], coherence)
+                  keys["test"], coherence, force_psd_column(src, cols, values, lines))
 
 
 def write_frf_csv(path, frfset: FRFSet) -> None:
@@ -149,8 +155,8 @@ def write_frf_csv(path, frfset: FRFSet) -> None:
     lines = [f"# {key} = {text}" for key, text in header_values(frfset)]
     names = ["freq_hz"] + [f"{k}_{p}" for p in frfset.points for k in ("re", "im")]
     n_pts = len(frfset.points)
-    extras = [(k, v) for k, v in (("force", frfset.force), ("coherence", frfset.coherence))
-              if v is not None]
+    extras = [(k, v) for k, v in (("force", frfset.force), ("coherence", frfset.coherence),
+                                  ("force_psd", frfset.force_psd)) if v is not None]
     table = np.empty((frfset.freq_hz.size, 1 + 2 * n_pts + len(extras)))
     table[:, 0] = frfset.freq_hz
     table[:, 1:2 * n_pts + 1:2] = frfset.frf.real
@@ -234,9 +240,9 @@ def write_frf_uff(path, frfset: FRFSet) -> None:
     id4 = id4 or "NONE"
     if len(id4) > 80:
         raise ValueError(f"UFF ID line too long for the keys ({id4!r}); use CSV")
-    if frfset.force is not None or frfset.coherence is not None:
-        raise ValueError("a universal file has no force column (nor coherence); write CSV "
-                         "to keep it")
+    if any(v is not None for v in (frfset.force, frfset.coherence, frfset.force_psd)):
+        raise ValueError("a universal file has no force column (nor coherence, force_psd); "
+                         "write CSV to keep it")
     dsets = []
     for j, label in enumerate(frfset.points):
         node, direction = _node_dir(label, j + 1)

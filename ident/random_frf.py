@@ -4,16 +4,29 @@
 averaged over a broadband random record; its ``excitation`` is the drive RMS and its
 ``response_amplitude`` the response RMS in the mode's band.
 
-Response RMS (:func:`mode_response_rms`). With the drive's power spectral density flat
-over the file's lines, ``S_ff = e^2 / (f_last - f_first)`` (one-sided, per Hz; an
-assumption: a file gives no spectrum, and a shaker's force drop at resonance breaks
-it), the mode's response RMS at a point is
+Response RMS (:func:`mode_response_rms`): the mode's own share of the response, from
+the identified mode's own FRF ``H_r`` in the file's quantity (residue over pole and its
+conjugate; the other modes' share is not counted) and the drive's one-sided
+autospectrum ``G_ff`` (per Hz),
 
-    sigma = e sqrt( int_0^inf |H_r(f)|^2 df / (f_last - f_first) )
+    sigma^2 = int_0^inf G_ff(f) |H_r(f)|^2 df                                      (2)
 
-with ``H_r`` the identified mode's own FRF in the file's quantity (residue over pole
-and its conjugate). Only ratios between levels enter chi; the assumption sets the
-absolute value (and so R).
+with ``G_ff`` the file's ``force_psd`` column (the autospectrum the analyser averaged
+for the H1; Bendat & Piersol 2010, eq. 6.29 for the output spectrum of a linear
+system). Without that column the drive is taken flat over the file's lines,
+``G_ff = e^2 / (f_last - f_first)`` (an assumption; a shaker's force drop at resonance
+breaks it), so
+
+    sigma = e sqrt( int_0^inf |H_r(f)|^2 df / (f_last - f_first) )                 (1)
+
+Eq. (1) is the *expected* RMS under a drive of that spectrum; a finite record's drive
+has, in the mode's band, a power that scatters about it by ``1/sqrt(B T)`` (``B`` the
+mode's noise bandwidth, ``T`` the record): measured on the random series of
+``benchmarks/bench_random_chi.py`` (150 s records) the levels' RMS by eq. (1) spanned
+up to 7.1 % about the simulated one within a series, by eq. (2) at most 2.6 %
+(docs/free-decay-and-random.md). Only ratios between levels enter chi, so this scatter
+is what matters, not the absolute value (which the flat assumption sets, and with it
+R).
 
 Signature (:func:`random_signature`): a level not stated as random whose FRF looks
 averaged. A ``coherence`` column belongs to an averaged (random) estimate; otherwise
@@ -38,17 +51,41 @@ UNIFORM_NOISE_SLOPE = 0.5
 MIN_NOISE = 1e-4
 
 
-def mode_response_rms(mode, point: int, quantity: str, freq_hz, drive_rms: float) -> float:
-    """Response RMS of one identified mode at ``point`` under a drive of RMS
-    ``drive_rms`` flat over ``freq_hz`` (module doc), in the FRF's response unit."""
+def mode_response_rms(mode, point: int, quantity: str, freq_hz, drive_rms: float,
+                      drive_psd=None) -> float:
+    """Response RMS of one identified mode at ``point`` (module doc, eq. 1 or 2), in the
+    FRF's response unit.
+
+    Parameters
+    ----------
+    mode : identified mode (``pole``, ``shape``).
+    point : index of the point among the mode's shape entries.
+    quantity : "receptance", "mobility" or "accelerance".
+    freq_hz : (n,) the file's lines, Hz.
+    drive_rms : RMS of the drive (N or its unit); used when ``drive_psd`` is None, as a
+        drive flat over ``freq_hz`` (eq. 1).
+    drive_psd : (n,) or None, the drive's one-sided autospectrum ``G_ff`` at the lines
+        (unit^2/Hz, the file's ``force_psd``): then eq. 2, ``G_ff`` interpolated
+        linearly between lines and held beyond the first and last.
+    """
     f = np.asarray(freq_hz, float)
     shape = np.atleast_1d(mode.shape)[point]
     fd = mode.pole.imag / (2 * np.pi)
     hw = -mode.pole.real / (2 * np.pi)          # half-power half width, Hz
+    if drive_psd is None:
+        def psd(fr):
+            return np.full(np.shape(fr), float(drive_rms) ** 2 / (f[-1] - f[0]))
+    else:
+        g = np.asarray(drive_psd, float)
+        if g.shape != f.shape or np.any(~(g > 0)):
+            raise ValueError("drive_psd needs one value > 0 per line")
+
+        def psd(fr):
+            return np.interp(fr, f, g)
 
     def h2(fr):
         h = modal_receptance(mode.pole, shape, fr)[:, 0] * (2 * np.pi * fr) ** _POWER[quantity]
-        return np.abs(h) ** 2
+        return np.abs(h) ** 2 * psd(fr)
 
     # Gauss-Legendre: above fd/2 in th with f = fd + hw tan(th), which spreads the
     # resonance peak evenly (an adaptive rule over f misses a narrow peak by percent;
@@ -59,7 +96,7 @@ def mode_response_rms(mode, point: int, quantity: str, freq_hz, drive_rms: float
     th = 0.5 * (b - a) * x + 0.5 * (b + a)
     peak = 0.5 * (b - a) * np.sum(w * h2(fd + hw * np.tan(th)) * hw / np.cos(th) ** 2)
     low = 0.25 * fd * np.sum(w * h2(0.25 * fd * (x + 1)))
-    return float(drive_rms * np.sqrt((peak + low) / (f[-1] - f[0])))
+    return float(np.sqrt(peak + low))
 
 
 def random_signature(freq_hz, frf, modes=(), quantity="receptance",

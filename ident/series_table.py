@@ -17,9 +17,11 @@ and writes one row per mode and level:
 
 * random excitation (``# test = random``): ``excitation`` = the drive RMS,
   ``response_amplitude`` = the mode's response RMS at the drive point
-  (:func:`ident.random_frf.mode_response_rms`); column ``test = random``. A level not
-  stated as random whose FRF looks averaged gets a one-line warning
-  (:func:`ident.random_frf.random_signature`).
+  (:func:`ident.random_frf.mode_response_rms`: the mode's own FRF times the file's
+  ``force_psd``, else a drive flat over the lines); column ``test = random``. A level not
+  stated as random whose file looks averaged (coherence column, an averaged flat drive
+  spectrum, uniform line noise: :mod:`ident.random_evidence`) gets its numbers in
+  ``x_warning`` and one line for the series in the table's warnings.
 
 ``run_order`` comes from the files (all or none; default the file order); files that
 held the same level (equal to 1e-9) are repeats of one level (rows sharing ``level``);
@@ -43,7 +45,8 @@ from ident.errors import InputError
 from ident.frf_files import FRFSet
 from ident.modal_data import MeasuredData, annotation_warnings
 from ident.poles import QUANTITY_POWER, modal_receptance
-from ident.random_frf import mode_response_rms, random_signature
+from ident.random_evidence import GIVEN_AS, random_evidence, series_warning
+from ident.random_frf import mode_response_rms
 from ident.tracking import track_modes
 
 MIN_LEVELS = 4
@@ -77,7 +80,7 @@ def _amplitudes(f, mode):
     force = None if s.force is None else float(np.interp(f_d, s.freq_hz, s.force))
     if s.test == "random":
         return s.excitation, mode_response_rms(mode, p, f.quantity, s.freq_hz,
-                                               s.excitation), note
+                                               s.excitation, s.force_psd), note
     if f.control == "response":
         if force is None:
             force = s.excitation / float(np.interp(f_d, s.freq_hz, np.abs(s.frf[:, p])))
@@ -98,8 +101,7 @@ def _check_series(fits: list) -> tuple[set, list, np.ndarray]:
         raise InputError("the files mix test = stepped-sine and random; one series has one "
                          "test type (give --test to override the files)")
     signature = [None if f.frfset.test == "random" else
-                 random_signature(f.frfset.freq_hz, f.frfset.frf, f.result.modes, f.quantity,
-                                  f.frfset.coherence) for f in fits]
+                 random_evidence(f.frfset, f.result.modes, f.quantity) for f in fits]
     if len(controls) > 1:
         raise InputError("the files mix control = force and response; one series has one "
                          "control (give --control to override the files)")
@@ -184,8 +186,8 @@ def _columns(fits: list, tracks: _Tracks, run_order: np.ndarray, signature: list
         mode = f.result.modes[i]
         exc, amp, note = _amplitudes(f, mode)
         warn = list(f.warnings[i]) + ([note] if note else [])
-        if signature[k]:
-            warn.append(f"given as stepped sine, but {signature[k]}")
+        if signature[k] is not None and signature[k].looks_random:
+            warn.append(f"{GIVEN_AS}, but looks like a random test: {signature[k].line()}")
         warn += [f"a pole at {fits[kk].result.modes[ii].frequency_hz:.6g} Hz seen at "
                  f"{n} level(s) only was left out" for (kk, ii, _, _), n in dropped if kk == k]
         for key, v in zip(out, (level_of[k], exc, mode.omega2, mode.zeta, lab, amp,
@@ -228,4 +230,7 @@ def series_table(fits) -> MeasuredData:
     ``fits``: the :class:`ident.series.LevelFit` of every level."""
     tests, signature, run_order = _check_series(fits)
     out = _columns(fits, _tracks(fits), run_order, signature)
-    return _table(out, fits[0].control, tests.pop())
+    data = _table(out, fits[0].control, tests.pop())
+    if line := series_warning(signature):      # one line for the series, not one per level
+        data.warnings = [w for w in data.warnings if GIVEN_AS not in w] + [line]
+    return data

@@ -26,7 +26,7 @@ from fe.newmark import NewmarkIntegrator, NewmarkSettings, NewmarkState
 from fe.reduction import JointBank, ReducedModel
 from runs.ringdown import warped_step
 
-__all__ = ["RandomLevel", "band_limited_noise", "h1_estimate", "random_level"]
+__all__ = ["RandomLevel", "band_limited_noise", "h1_estimate", "h1_spectra", "random_level"]
 
 
 @dataclass
@@ -37,6 +37,7 @@ class RandomLevel:
     ----------
     freq_hz : (n_f,) lines of the estimate (Hz) inside the band.
     h1 : (n_f, n_out) complex H1 receptance (m/N); coherence : (n_f, n_out).
+    force_psd : (n_f,) the drive's one-sided autospectrum ``G_ff`` of the H1 (N^2/Hz).
     drive_rms : RMS of the force actually applied (N).
     response_rms : (n_out,) RMS displacement at the outputs (m).
     slip_rms : (n_joints,) RMS joint slip (m).
@@ -47,6 +48,7 @@ class RandomLevel:
     freq_hz: np.ndarray
     h1: np.ndarray
     coherence: np.ndarray
+    force_psd: np.ndarray
     drive_rms: float
     response_rms: np.ndarray
     slip_rms: np.ndarray
@@ -76,6 +78,13 @@ def band_limited_noise(n: int, dt: float, band_hz, rms: float, seed: int) -> np.
 def h1_estimate(force, response, fs: float, nperseg: int):
     """Welch H1 and coherence (module docstring): ``(freq_hz, H1 (n_f, n_out),
     coherence (n_f, n_out), n_averages)``; ``response`` (n, n_out)."""
+    f, H, coh, n_avg, _ = h1_spectra(force, response, fs, nperseg)
+    return f, H, coh, n_avg
+
+
+def h1_spectra(force, response, fs: float, nperseg: int):
+    """:func:`h1_estimate` and the drive's autospectrum ``G_ff`` it divides by:
+    ``(freq_hz, H1, coherence, n_averages, G_ff (n_f,))``, ``G_ff`` one-sided per Hz."""
     force = np.asarray(force, dtype=float)
     response = np.atleast_2d(np.asarray(response, dtype=float).T).T
     kw = {"fs": fs, "window": "hann", "nperseg": int(nperseg), "noverlap": int(nperseg) // 2}
@@ -87,7 +96,7 @@ def h1_estimate(force, response, fs: float, nperseg: int):
         H.append(Gfx / Gff)
         coh.append(np.abs(Gfx) ** 2 / (Gff * Gxx))
     n_avg = 1 + (force.size - int(nperseg)) // (int(nperseg) - int(nperseg) // 2)
-    return f, np.array(H).T, np.array(coh).T, n_avg
+    return f, np.array(H).T, np.array(coh).T, n_avg, Gff
 
 
 def random_level(model: ReducedModel, bank: JointBank, load, outputs, rms: float, band_hz,
@@ -139,10 +148,10 @@ def random_level(model: ReducedModel, bank: JointBank, load, outputs, rms: float
         if progress is not None:
             progress.update(m * dt_rec)
     f_rec, y_rec = e[n_settle:], y[n_settle:]
-    f, H, coh, n_avg = h1_estimate(f_rec, y_rec, 1.0 / dt_rec, nperseg)
+    f, H, coh, n_avg, gff = h1_spectra(f_rec, y_rec, 1.0 / dt_rec, nperseg)
     band = (f >= band_hz[0]) & (f <= band_hz[1]) & (f > 0)
     return RandomLevel(freq_hz=f[band], h1=H[band], coherence=coh[band],
-                       drive_rms=float(np.sqrt(np.mean(f_rec ** 2))),
+                       force_psd=gff[band], drive_rms=float(np.sqrt(np.mean(f_rec ** 2))),
                        response_rms=np.sqrt(np.mean(y_rec ** 2, axis=0)),
                        slip_rms=np.sqrt(s2 / max(n_kept, 1)), n_averages=int(n_avg),
                        duration_s=float((n - n_settle) * dt_rec), seed=int(seed))

@@ -135,8 +135,10 @@ def test_random_series_given_as_stepped_sine_gets_one_warning_line(random_series
     bare = load_series(random_series["bare"], n_modes=1)
     assert set(bare.test) == {"stepped-sine"}
     hits = [w for w in bare.warnings if "given as stepped sine" in w]
-    assert len(hits) == len(random_series["bare"])          # one line per level
-    assert all("\n" not in w for w in hits)
+    assert len(hits) == 1 and "\n" not in hits[0]           # one line for the series
+    assert f"{len(random_series['bare'])} of {len(random_series['bare'])} levels" in hits[0]
+    assert "line-to-line noise uniform" in hits[0]
+    assert all("given as stepped sine" in w for w in bare.extra["x_warning"])  # per level
 
 
 def test_stepped_sine_series_with_relative_noise_gets_no_random_warning(tmp_path):
@@ -172,7 +174,8 @@ def test_coherence_column_round_trips_and_names_a_random_test(random_series, tmp
     back = read_frf(paths[0])
     np.testing.assert_array_equal(back.coherence, np.linspace(0.5, 0.99, back.freq_hz.size))
     data = load_series(paths, n_modes=1)
-    assert sum("coherence column" in w for w in data.warnings) == len(paths)
+    assert sum("coherence column" in w for w in data.warnings) == 1      # the series' line
+    assert all("coherence column" in w for w in data.extra["x_warning"])  # every level
     text = paths[0].read_text().splitlines()
     head = text.index(next(t for t in text if t.startswith("freq_hz")))
     row = text[head + 1].split(",")
@@ -180,4 +183,63 @@ def test_coherence_column_round_trips_and_names_a_random_test(random_series, tmp
     text[head + 1] = ",".join(row)
     paths[0].write_text("\n".join(text) + "\n")
     with pytest.raises(ValueError, match="coherence must be in"):
+        read_frf(paths[0])
+
+
+def test_mode_response_rms_from_the_drive_spectrum_against_the_time_domain_rms():
+    """A shaker's force drop at resonance (a notch of seeded depth and width in the drive
+    spectrum, which the code never sees) under a linear SDOF: the response RMS from the
+    file's ``force_psd`` (Welch G_ff at the lines) and the mode's FRF matches the RMS of
+    the response in time (circular convolution of the drawn drive: exact), while the flat
+    drive assumption (eq. 1) misses it by the notch."""
+    from scipy import signal
+    rng = np.random.default_rng(4141)
+    m, f0, zeta = 1.7, rng.uniform(40.0, 80.0), rng.uniform(0.004, 0.008)
+    depth, width = rng.uniform(0.4, 0.7), rng.uniform(1.0, 3.0)       # notch, Hz
+    wn = 2 * np.pi * f0
+    fs, T = 8 * (f0 + 30.0), 200.0
+    n = int(fs * T)
+    freq = np.fft.rfftfreq(n, 1 / fs)
+    band = (freq > f0 - 25.0) & (freq < f0 + 25.0)
+    F = (rng.standard_normal(freq.size) + 1j * rng.standard_normal(freq.size)) * band
+    F *= 1.0 - depth / (1.0 + ((freq - f0) / width) ** 2)
+    H = 1.0 / (m * (wn ** 2 - (2 * np.pi * freq) ** 2) + 2j * zeta * wn * m * 2 * np.pi * freq)
+    force, x = np.fft.irfft(F, n), np.fft.irfft(H * F, n)
+    truth = np.sqrt(np.mean(x ** 2))
+    lines, gff = signal.welch(force, fs=fs, window="hann", nperseg=int(fs / 0.1))
+    keep = (lines > f0 - 24.0) & (lines < f0 + 24.0)
+    wd = wn * np.sqrt(1 - zeta ** 2)
+    mode = SimpleNamespace(pole=complex(-zeta * wn, wd), shape=np.array([1 / (2j * m * wd)]))
+    rms = np.sqrt(np.mean(force ** 2))
+    by_psd = mode_response_rms(mode, 0, "receptance", lines[keep], rms, gff[keep])
+    flat = mode_response_rms(mode, 0, "receptance", lines[keep], rms)
+    assert by_psd == pytest.approx(truth, rel=0.03)        # measured 1.011
+    assert flat / truth > 1.3                                # measured 1.73
+    with pytest.raises(ValueError, match="drive_psd"):
+        mode_response_rms(mode, 0, "receptance", lines[keep], rms, -gff[keep])
+
+
+def test_force_psd_column_round_trips_and_sets_the_response_rms(random_series, tmp_path):
+    """``force_psd`` in an FRF CSV: kept exactly, refused when <= 0, and a random level's
+    ``response_amplitude`` follows it (a drive spectrum 4x the flat one: RMS 2x)."""
+    from ident.frf_files import read_frf
+    paths = []
+    for k, p in enumerate(random_series["paths"]):
+        s = read_frf(p)
+        s.force_psd = np.full(s.freq_hz.size, 4.0 * s.excitation ** 2
+                              / (s.freq_hz[-1] - s.freq_hz[0]))
+        paths.append(tmp_path / f"psd_{k}.csv")
+        write_frf(paths[-1], s)
+    back = read_frf(paths[0])
+    np.testing.assert_array_equal(back.force_psd, read_frf(paths[0]).force_psd)
+    assert back.force_psd[0] == 4.0 * back.excitation ** 2 / (back.freq_hz[-1] - back.freq_hz[0])
+    data = load_series(paths, n_modes=1)
+    np.testing.assert_allclose(data.response_amplitude, 2 * random_series["sigma"], rtol=0.02)
+    text = paths[0].read_text().splitlines()
+    head = text.index(next(t for t in text if t.startswith("freq_hz")))
+    row = text[head + 1].split(",")
+    row[-1] = "0"
+    text[head + 1] = ",".join(row)
+    paths[0].write_text("\n".join(text) + "\n")
+    with pytest.raises(ValueError, match="force_psd must be > 0"):
         read_frf(paths[0])
