@@ -173,14 +173,15 @@ def _fit_extension(problem, ext, start_values, joint_starts, base, basins=None,
                    physical=None):
     """Multi-start fit of ``ext`` (its starts x ``joint_starts``, dicts of joint
     parameters) from ``start_values``, ``base``: the base model's parameters; with
-    ``physical`` (the base fit's first start) its starts from there too; only the
+    ``physical`` (the base fit's starts, each a full parameter dict) its starts from
+    each of them too; only the
     starts of :func:`_basin_starts`; (fit or None, the starts, the distinct optima:
     :func:`fit_base`)."""
     free = tuple(base) + tuple(ext.parameter_names)
     specs = [problem.parameters[n] for n in ext.parameter_names]
     starts = [dict(start_values, **j, **s0) for s0 in ext.start_sets(specs)
               for j in joint_starts]
-    starts += [dict(physical, **s0) for s0 in ext.start_sets(specs)] if physical else []
+    starts += [dict(b, **s0) for b in physical or () for s0 in ext.start_sets(specs)]
     f, s, kept = fit_base(problem, starts, free, _basin_starts(starts, basins, ext.cause))
     return (f if f is not None and f.success else None), s, kept
 
@@ -257,8 +258,8 @@ def _select(data, mask, fe, causes, say, noises, basins) -> dict:
     joint_starts = fe.form.restarts(bfit.values)
     # a base optimum whose joint has no effect (flat: the joints stuck, or slipped
     # through, at every level) is a degenerate start: the causes start from the base
-    # fit's first start as well, where the joint works the data
-    physical = {n: p.start for n, p in P.items()} \
+    # fit's starts as well, where the joint works the data
+    physical = [{**{n: p.start for n, p in P.items()}, **s0} for s0 in starts] \
         if set(bfit.flat) & set(fe.form.names) else None
     for cause in (EXTENSIONS if causes is None else causes):
         if cause in skip:
