@@ -89,6 +89,11 @@ class JointForm:
         """The joint starts of a cause's fit from the base optimum ``values``."""
         return [{}]
 
+    def engaged_starts(self, P: dict) -> list:
+        """Starts of the base fit where the joints work the data at the lowest levels,
+        tried when its optimum's joint has no effect (``P``: the base parameters)."""
+        return []
+
     def joint(self, p: dict, lin) -> dict:
         """The joints of ``p`` on ``lin`` (:class:`feloop.levels.LinearPart`): ``law``,
         ``K_T`` (N/m), ``F_S`` (N), ``slip_scale`` (m), ``params`` (the joints for
@@ -134,6 +139,11 @@ class IwanForm(JointForm):
 
     def starts(self, first):
         return [{"chi": c} for c in (-0.2, -0.6) if abs(c - first["chi"]) > 0.05]
+
+    def engaged_starts(self, P):
+        # a weaker joint at level 1 than the start's (whose damping growth can carry
+        # the fit to joints slipped through at every level): 1/e^2 .. 1/e^6 of it
+        return [{"ln_dc1": P["ln_dc1"].start - d} for d in (2.0, 4.0, 6.0)]
 
     def restarts(self, values):
         # chi from the base optimum and from -0.5 (an extension can move chi far: a slip

@@ -307,3 +307,18 @@ def test_an_independent_hardening_is_named_where_the_base_joint_slips_through():
                      levels=DoubleBeamLevels.from_data)["fe"]
     assert r["cause"] == "geometric-hardening" and not r["also"]
     assert r["gain"] > 1.5 and r["fit_test"]["p_value"] > 1e-3
+
+
+def test_a_base_fit_slipped_through_is_refitted_from_an_engaged_joint():
+    """Draw 6214 (macro-slip, Dirac share 0.52, top slip 2.9 phi_max): from every default
+    start the base fit ends with its joints slipped through at every level and f0 3.5 %
+    above the data (chi2 3182, chi and ln |kappa1| B~ flat); refitted from the form's
+    engaged starts (a weaker joint at level 1) it is 218, and the macro-slip realization
+    is then named first, with a held-out gain > 1."""
+    from feloop.diagnosis import fe_diagnosis
+
+    case = draw_case(6214, "macro-slip")
+    r = fe_diagnosis(case.data, mask=np.ones(len(case.data), dtype=bool),
+                     levels=DoubleBeamLevels.from_data)["fe"]
+    assert r["evidence"]["none"]["chi2"] < 300.0
+    assert r["cause"] == "macro-slip" and r["gain"] > 1.5
