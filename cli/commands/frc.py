@@ -123,12 +123,28 @@ def _case_model(args):
     return case, law
 
 
+def _curve(model, law, F: float, load, band_hz, settings, observe=None) -> dict:
+    """One force's curve (:func:`fe.frc.forced_response` over ``band_hz``, Hz) as the
+    JSON's ``curves`` entry; a steady state not found is one line naming the force."""
+    from fe.frc import forced_response
+    from fe.newton_path import SteadyStateError
+
+    lo, hi = band_hz
+    try:
+        r = forced_response(model, law, load, (2 * math.pi * lo, 2 * math.pi * hi),
+                            observe=observe, settings=settings)
+    except SteadyStateError as exc:
+        raise ValueError(f"force {F:g} N: {exc}") from None
+    return {"force_N": F, "points": r.to_points(),
+            "folds": [{"frequency_hz": f["frequency_hz"], "amplitude": f["amplitude"],
+                       "peak": f["peak"]} for f in r.folds]}
+
+
 def run(args) -> int:
     _check(args)
     if args.case is not None:
         return _run_case(args)
-    from fe.frc import FRCSettings, forced_response
-    from fe.newton_path import SteadyStateError
+    from fe.frc import FRCSettings
 
     model, law, p = _model(args)
     f0 = float(model.omega[0]) / (2 * math.pi)
@@ -138,14 +154,7 @@ def run(args) -> int:
     curves = []
     t0 = time.perf_counter()
     for F in args.force:
-        try:
-            r = forced_response(model, law, np.array([F]), (2 * math.pi * lo, 2 * math.pi * hi),
-                                settings=settings)
-        except SteadyStateError as exc:
-            raise ValueError(f"force {F:g} N: {exc}") from None
-        curves.append({"force_N": F, "points": r.to_points(),
-                       "folds": [{"frequency_hz": f["frequency_hz"], "amplitude": f["amplitude"],
-                                  "peak": f["peak"]} for f in r.folds]})
+        curves.append(_curve(model, law, F, np.array([F]), (lo, hi), settings))
     elapsed = time.perf_counter() - t0
     if args.json:
         print_json({"model": {"mass_kg": args.mass, "stiffness_N_per_m": args.stiffness,
@@ -179,8 +188,7 @@ def _print_curves(curves) -> None:
 
 def _run_case(args) -> int:
     """``--case``: the same curves for a case's jointed model at its drive DOF."""
-    from fe.frc import FRCSettings, forced_response
-    from fe.newton_path import SteadyStateError
+    from fe.frc import FRCSettings
 
     case, law = _case_model(args)
     model = case.model
@@ -192,15 +200,7 @@ def _run_case(args) -> int:
     curves = []
     t0 = time.perf_counter()
     for F in args.force:
-        try:
-            r = forced_response(model, law, F * case.load(), (2 * math.pi * lo,
-                                                              2 * math.pi * hi),
-                                observe=observe, settings=settings)
-        except SteadyStateError as exc:
-            raise ValueError(f"force {F:g} N: {exc}") from None
-        curves.append({"force_N": F, "points": r.to_points(),
-                       "folds": [{"frequency_hz": f["frequency_hz"], "amplitude": f["amplitude"],
-                                  "peak": f["peak"]} for f in r.folds]})
+        curves.append(_curve(model, law, F, F * case.load(), (lo, hi), settings, observe))
     elapsed = time.perf_counter() - t0
     head = {"case": case.name, "mode": case.mode, "path": args.path,
             "stuck_frequency_hz": f0, "drive_dof": case.drive_dof,
