@@ -58,7 +58,8 @@ class ForcedResponse:
     max_multiplier : (n,) largest Floquet multiplier modulus (Hill; NaN without stability).
     stable : (n,) bool (Hill).
     floquet_multiplier : (n,) the same from the Newmark period map (NaN unless asked).
-    folds : list of dict (``omega``, ``amplitude``, ``peak``, ``after``).
+    folds : list of dict (``omega``, ``amplitude``, ``peak``, ``after``, and ``fold``:
+        the :class:`fe.continuation.Fold` itself).
     harmonics : harmonics kept.
     """
 
@@ -167,7 +168,8 @@ def forced_response(model: ReducedModel, law, load, omega_range, observe=None,
     for f in b.folds:
         fa, fp = _observed(bal, f.x[None, :], c)
         folds.append({"omega": f.p, "frequency_hz": f.p / (2 * np.pi),
-                      "amplitude": float(fa[0]), "peak": float(fp[0]), "after": f.after})
+                      "amplitude": float(fa[0]), "peak": float(fp[0]), "after": f.after,
+                      "fold": f})
     return ForcedResponse(omega=b.p, x=b.x, amplitude=amp, peak=peak, max_multiplier=mods,
                           stable=mods < 1.0, folds=folds, harmonics=bal.harmonics,
                           floquet_multiplier=floq)

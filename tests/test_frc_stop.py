@@ -96,20 +96,14 @@ def test_stop_orbits_by_time_integration(stop_curve):
     assert pk < law.gap < r.peak[middle]
 
 
-def test_stop_folds_against_a_refined_solve():
+def test_stop_folds_against_a_refined_solve(stop_curve):
     """The folds of the continuation against a second route: the extremum of ``w`` along
     the branch with one harmonic coefficient held (``test_continuation.refined_fold``,
     Brent), within 1e-6 relative (measured 2e-16). Both folds sit where the contact
     starts between two AFT samples: the tangent's frequency component jumps there
     (0.32 and 0.013 left at the located point) and the extremum is that corner."""
-    from fe.continuation import continue_branch
     from test_continuation import refined_fold
 
-    model, law = sdof(1.0, 0.01), OneSidedStop(1.0, 0.2)
-    bal = ForcedBalance(model, law, LOAD, HARMONICS, 1024, jacobian="tangent")
-    b = continue_branch(bal, bal.stuck(0.9), 0.9, (0.9, 1.2),
-                        ContinuationSettings(ds=0.05, ds_max=0.3), p_scale=0.01)
-    assert len(b.folds) == 2
-    for f in b.folds:
-        assert abs(f.p - refined_fold(bal, f)) < 1e-6 * f.p
-
+    _, _, bal, r = stop_curve
+    for f in r.folds:
+        assert abs(f["omega"] - refined_fold(bal, f["fold"])) < 1e-6 * f["omega"]
