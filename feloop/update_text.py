@@ -209,7 +209,7 @@ to it, {d['force_scale_scaling']}).
 
 ## What the assumed properties change (each changed, the model refitted)
 
-| assumption | delta chi2 | top held-out frequency shift [Hz] | top held-out zeta shift [%] | top slip/phi_max |
+| assumption | delta chi2 | top held-out frequency shift [Hz] | top held-out zeta shift [%] | top slip/{d.get('slip_scale_name', 'phi_max')} |
 | --- | --- | --- | --- | --- |
 {assumed}
 """
