@@ -185,6 +185,12 @@ class IwanForm(JointForm):
         return {"chi": float(values["chi"]), "beta": float(joint["beta"])}
 
 
+#: further starts of a slip scale's ln(scale / a_ref) besides the parameter's own 0.7:
+#: the onset below, at and well above level 1's slip (assumed grid; a slider stuck at
+#: every level has no gradient, so one start must slip)
+SLIP_STARTS = (-0.7, 2.1)
+
+
 def _scale_parameter(law: str, what: str) -> Parameter:
     return Parameter("ln_slip", 0.7, math.log(1e-3), math.log(1e3), 0.2, "1",
                      f"ln({what} / a_ref): where the {law} joints slip, in units of the "
@@ -201,9 +207,7 @@ class JenkinsForm(JointForm):
         return {"ln_slip": _scale_parameter(self.law, "F_S/K_T")}
 
     def starts(self, first):
-        # the onset below, at and well above level 1's slip (assumed grid; a slider
-        # stuck at every level has no gradient, so one start must slip)
-        return [{"ln_slip": v} for v in (-0.7, 2.1)]
+        return [{"ln_slip": v} for v in SLIP_STARTS]
 
     def joint(self, p, lin):
         u = math.exp(float(p["ln_slip"])) * lin.a_ref
@@ -230,7 +234,7 @@ class BoucWenForm(JointForm):
                                    "stiffness left in gross slip, a fraction of K_T")}
 
     def starts(self, first):
-        return [{"ln_slip": v} for v in (-0.7, 2.1)]
+        return [{"ln_slip": v} for v in SLIP_STARTS]
 
     def joint(self, p, lin):
         u, alpha = math.exp(float(p["ln_slip"])) * lin.a_ref, float(p["alpha"])

@@ -186,7 +186,7 @@ def _engaged_refit(data, fe, problem, starts, bfit, base_starts) -> tuple:
                                 list(range(len(starts), len(every))))
     if fit2.success and fit2.chi2 < bfit.chi2 - SAME_OPTIMUM * (1.0 + bfit.chi2):
         return every, fit2, starts2
-    return every, bfit, base_starts + [s for s in every[len(starts):]]
+    return every, bfit, base_starts + every[len(starts):]
 
 
 def _fit_extension(problem, ext, start_values, joint_starts, base, basins=None,

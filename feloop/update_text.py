@@ -84,6 +84,10 @@ def _fit_state_lines(s: dict) -> list:
     lines = [f"not tested: {c} ({why})" for c, why in s["untested"].items()]
     if s.get("estimator_start", "used") != "used":
         lines.append(f"base fit started without the paper's estimator: {s['estimator_start']}")
+    flat = s["fit"].get("flat") or []
+    if flat:                  # inverse.decrement.FLAT_EFFECT: no effect where it stopped
+        lines.append(f"flat at the optimum (no effect there, not determined): "
+                     f"{', '.join(LABEL.get(n, n) for n in flat)}")
     if s["failed_simulations"] or s["fallbacks"]:
         lines.append(f"failed simulations in the fit: {s['failed_simulations']}; steady states "
                      f"reached by a fallback: {', '.join(s['fallbacks']) or 'none'}")
