@@ -271,10 +271,11 @@ def test_an_xtol_stop_on_a_large_gradient_is_not_converged():
 
 def test_a_capped_fit_is_not_converged_and_its_folds_fail(monkeypatch):
     """Three evaluations cannot fit four parameters from their starts: not converged, and
-    leave-one-out folds fitted so are all failed folds (counted as unconverged). Folds
-    start from the full fit's optimum (inverse.fe_selection.cross_validate): from the
-    capped fit's point they fail; from the converged optimum three evaluations suffice
-    (a fold's optimum is near the full one)."""
+    leave-one-out folds fitted so are all failed folds (counted as unconverged). A fold
+    that ends above the full fit's point on its own levels is refitted from that point
+    (inverse.fe_selection.cross_validate): from the capped fit's point the folds fail
+    again; from the converged optimum three evaluations suffice (a fold's optimum is
+    near the full one)."""
     import functools
 
     import inverse.fe_selection as fs
