@@ -174,7 +174,8 @@ def run_update(settings: UpdateSettings, levels, executor="serial", progress: bo
         profiles = run_profiles(problem, best, kt_grid, free, settings.confidence,
                                 executor=executor, progress=progress, store=store)
         best = _adopt(problem, best, profiles)
-    names = [n for n in free if settings.profiles == "all" or best.at_bound.get(n)]
+    names = [n for n in free if settings.profiles == "all" or best.at_bound.get(n)
+             or n in fe.form.profiled]
     grids = {n: linear_grid(best, n, P[n], settings.profile_points) for n in names}
     if grids:
         profiles.update(run_profiles(problem, best, grids, free, settings.confidence,

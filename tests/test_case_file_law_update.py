@@ -148,3 +148,28 @@ def test_stuck_and_fully_slipped_limits(tmp_path, law, extra, rtol):
     ratio = slipped_omega2_ratio(lin)
     assert np.allclose(slipped.omega2[-3:] / lin.omega_k ** 2, ratio, rtol=1e-5, atol=0)
     assert ratio < 1 - 1e-3                     # the joints do work the mode
+
+
+def test_a_slip_above_every_fit_level_is_bounded_below_not_determined(tmp_path, capsys):
+    """The documented virtual test (cases.stepped_sine_test, its default: the top level at
+    4 slip scales, so only levels 9 and 10 slide) of a file of another structure (the
+    shipped lap's with its fs left out): the fit levels 1-7 bound the slip from below only.
+    Before, a linearized interval there read 'determined' around the onset's kink and
+    missed the hidden slip; now ln_slip is profiled (JenkinsForm.profiled): open above,
+    and the hidden slip inside."""
+    import cases.stepped_sine_test as sst
+    from cases.registry import resolve_case
+    from ident.measured import write_measured
+
+    table = tmp_path / "levels.csv"
+    shutil.copy(PLACEHOLDER, table)
+    truth = _law_file(tmp_path, "jenkins", 200.0, table)
+    data, _ = sst.simulate(resolve_case(str(truth)), 3)
+    write_measured(table, data)
+    path = _law_file(tmp_path, "jenkins", None, table)
+    assert main(["update", "--case", str(path), "--out", str(tmp_path / "u"), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    ln = s["parameters"]["ln_slip"]
+    assert ln["interval_kind"] == "profile likelihood" and ln["interval"][1] is None
+    scale = s["derived"]["F_S_N"] / math.exp(ln["value"])      # F_S at ln_slip = 0
+    assert scale * math.exp(ln["interval"][0]) < 200.0           # the hidden fs inside
