@@ -28,6 +28,8 @@ CAPABILITIES = {
     "measured_data": "measured data",
     "nonlinear_model": "nonlinear model with every joint parameter given (backbone)",
     "update": "FE model updating against its measured levels (update, loop)",
+    "update_modes": "one joint fitted to several measured modes (update --modes, loop "
+                    "--fit-modes)",
     "fe_levels": "FE-levels model of measured levels (diagnose DATA --case)",
     "fe_check": "FE-level check of a one-mode diagnosis (diagnose DATA --case)",
     "uncertainty": "Monte Carlo of its own stepped-sine study (uncertainty)",

@@ -32,7 +32,7 @@ class CaseFileCase(Case):
         if joints and cf.drive is not None and not missing_joint_parameters(cf):
             out.append("nonlinear_model")
         if fe_loop.qualifies(cf):
-            out += ["fe_levels", "update", "fe_uncertainty"]
+            out += ["fe_levels", "update", "update_modes", "fe_uncertainty"]
         return tuple(out)
 
     def _calibrated_file(self, element_size=None, calibrated=True):
@@ -59,6 +59,9 @@ class CaseFileCase(Case):
 
     def _update(self, **options):
         return fe_loop.update_builder(self.file)(**options)
+
+    def _update_modes(self, **options):
+        return fe_loop.modes_builder(self.file)(**options)
 
     def _fe_uncertainty(self, *args, **options):
         return fe_loop.uncertainty_builder(self.file)(*args, **options)

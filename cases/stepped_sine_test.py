@@ -21,8 +21,10 @@ stepped sine on its own bank (one slider per joint element); ``bouc-wen``, which
 AFT march, is solved line by line by first-harmonic balance with its describing
 function (:func:`fe.hb_exact.continuation_exact`); both identified by LSCF as above.
 
-``python -m cases.stepped_sine_test CASE.toml OUT.csv SEED`` writes the table
-(``x_source = simulated``; the seeded chi only printed) and prints the truth. SI units.
+``python -m cases.stepped_sine_test CASE.toml OUT.csv SEED [MODES] [--top-slip X]``
+writes the table (``x_source = simulated``; the seeded chi only printed) and prints the
+truth; ``MODES`` (e.g. ``1,2``): those bending modes, one table, each with the noise of
+seed ``SEED + 100 mode``. SI units.
 """
 from __future__ import annotations
 
@@ -75,13 +77,17 @@ def _receptance(nc, red, load, lines, force):
     return np.array(rec), "; ".join(words) or "none"
 
 
-def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
+def simulate(case, seed: int, mode: int | None = None,
+             top_slip: float | None = None) -> tuple[MeasuredData, dict]:
     """(table, truth) of :class:`cases.case.Case` ``case`` (a case file with joints and
-    ``[measured] mode``) for ``seed`` (module docstring)."""
+    ``[measured] mode``, or the bending mode ``mode``) for ``seed`` (module docstring;
+    ``top_slip``: the top level's linear slip in slip scales, default
+    :data:`TOP_SLIP` or :data:`TOP_SLIP_OTHER`)."""
     from casefile.nonlinear import file_law, nonlinear_case
 
     rng = np.random.default_rng(seed)
     cf, _ = case.require("calibrated_file")()
+
     iwan = file_law(cf) == "iwan4"
     chi = float(rng.uniform(*CHI_RANGE)) if iwan else None
     if iwan:
@@ -89,7 +95,14 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
             dataclasses.replace(i, chi=chi) if i.tangential == "joint" else i
             for i in cf.interfaces))
     model = case.fe_model()
-    nc = nonlinear_case(cf, model)
+    if mode is not None:          # the bending mode's index among the model's modes
+        from casefile.nonlinear import N_RITZ_MODES
+
+        order = model.bending_order(*model.modes(N_RITZ_MODES))
+        if not np.any(order == int(mode)):
+            raise ValueError(f"{cf.path}: no bending mode {mode} among the model's modes")
+    nc = nonlinear_case(cf, model, mode=None if mode is None else
+                        int(np.flatnonzero(order == int(mode))[0]) + 1)
     red, k = nc.model, nc.mode - 1
     phi = red.basis[:, k]
     omega = float(red.omega[k])
@@ -98,7 +111,7 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
     load[nc.drive_dof] = 1.0
     slip_per_n = float(np.max(np.abs(model.slip_matrix @ phi))) * abs(phi[nc.drive_dof]) \
         / (2.0 * zeta * omega ** 2)          # linear modal slip at resonance per N
-    top = TOP_SLIP if iwan else TOP_SLIP_OTHER
+    top = top_slip if top_slip is not None else TOP_SLIP if iwan else TOP_SLIP_OTHER
     force = top * nc.phi_max / slip_per_n * 2.0 ** (np.arange(10) - 9.0)
     f0 = omega / (2 * math.pi)
     hp = 2.0 * zeta * f0
@@ -113,7 +126,8 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
         m = max(modes, key=lambda m: float(np.max(np.abs(m.shape))))   # the dominant mode
         om2[lv], ze[lv] = m.omega2, m.zeta
     n = force.size
-    label = cf.measured.mode if cf.measured is not None and cf.measured.mode else nc.mode
+    label = mode if mode is not None else cf.measured.mode \
+        if cf.measured is not None and cf.measured.mode else nc.mode
     run_order = rng.permutation(n) + 1
     data = MeasuredData(level=np.arange(1, n + 1), excitation=force,
                         omega2=om2 * (1.0 + SIGMA_OMEGA2 * rng.standard_normal(n)),
@@ -130,8 +144,20 @@ def main(argv=None) -> int:
     from cases.registry import resolve_case
     from ident.measured import write_measured
 
-    case_file, out, seed = (argv if argv is not None else sys.argv[1:])[:3]
-    data, truth = simulate(resolve_case(case_file), int(seed))
+    args = list(argv if argv is not None else sys.argv[1:])
+    top = None
+    if "--top-slip" in args:
+        i = args.index("--top-slip")
+        top = float(args[i + 1])
+        del args[i:i + 2]
+    case_file, out, seed = args[:3]
+    if len(args) < 4:
+        data, truth = simulate(resolve_case(case_file), int(seed), top_slip=top)
+    else:          # several bending modes, each with its own noise (seed + 100 mode)
+        parts = [simulate(resolve_case(case_file), int(seed) + 100 * m, mode=m, top_slip=top)
+                 for m in (int(t) for t in args[3].split(","))]
+        data = MeasuredData.concatenate([d for d, _ in parts])
+        truth = [t for _, t in parts]
     write_measured(out, data)
     print(f"wrote {out} (simulated): truth {truth}")
     return 0

@@ -28,7 +28,7 @@ from casefile.plausibility import joint_plausibility
 from ident.errors import InputError
 
 __all__ = ["qualifies", "levels_builder", "assumption_variants",
-           "update_builder", "fitted_plausibility", "uncertainty_builder"]
+           "update_builder", "modes_builder", "fitted_plausibility", "uncertainty_builder"]
 
 def qualifies(cf) -> bool:
     """The file has what the FE loop needs (module docstring): joint interfaces of one
@@ -155,6 +155,24 @@ def update_builder(cf):
         r["plausibility"] = fitted_plausibility(cf, r)
         return r
     return update
+
+
+def modes_builder(cf):
+    """``run(fit_modes, predict_modes=(), data_path=None, fit_levels=None,
+    force_scale=1.0, rig_repeatability=None)``: :func:`feloop.modes_run.run_modes` on the
+    file's FE-levels models (one joint over several modes; the file's table unless
+    ``data_path``)."""
+    def run(fit_modes, predict_modes=(), data_path=None, fit_levels=None, force_scale=1.0,
+            rig_repeatability=None):
+        from feloop.modes_run import ModesSettings, run_modes
+
+        path = str(cf.measured.file if data_path is None else data_path)
+        settings = ModesSettings(path, tuple(fit_modes), tuple(predict_modes), fit_levels,
+                                 force_scale, rig_repeatability)
+        r = run_modes(settings, levels_builder(cf), case_name=cf.name)
+        r["notes"] = [_nominal_joint_note(cf)]
+        return r
+    return run
 
 
 def fitted_plausibility(cf, r: dict) -> list[dict]:

@@ -32,14 +32,13 @@ import math
 import numpy as np
 
 from feloop.causes import force_scale_power
-from feloop.levels import level_entries
 from feloop.select import chosen_model, fe_select
 from feloop.verdict import judged_model, one_verdict, verdict_of
 from inverse.fe_selection import held_out_errors, prediction_sd
 from inverse.profile import bounded_interval, linear_grid, run_profiles
 
 __all__ = ["FIT_RULE", "default_fit_mask", "fe_diagnosis", "own_scatter_verdict",
-           "unconverged_fits", "parameter_table", "held_out_table"]
+           "unconverged_fits", "parameter_table", "held_out_table", "level_entries"]
 
 FIT_RULE = "all levels but the top three (at least 5 fitted)"
 #: The acceptance tolerances of issue 13 on held-out levels.
@@ -279,3 +278,17 @@ def report(data, mask, s: dict, own: dict | None = None, every: tuple | None = N
     }
     fe_rows = level_entries(data, mask, {"base": base_pred, "extended": ext_pred})
     return {"fe_levels": fe_rows, "fe": summary}
+
+
+def level_entries(data, mask, models: dict) -> list:
+    """One dict per level of ``data``: ``level``, ``held_out`` (not in ``mask``), ``measured``
+    and each of ``models`` (name -> LevelPrediction), each as ``{frequency_hz, zeta}``."""
+    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
+    rows = []
+    for i, lv in enumerate(data.level):
+        row = {"level": int(lv), "held_out": bool(not mask[i]),
+               "measured": {"frequency_hz": float(f_meas[i]), "zeta": float(data.zeta[i])}}
+        for name, pred in models.items():
+            row[name] = {"frequency_hz": float(pred.frequency_hz[i]), "zeta": float(pred.zeta[i])}
+        rows.append(row)
+    return rows

@@ -57,7 +57,7 @@ from inverse.random_amplitude import rayleigh_nodes
 from feloop.joint_forms import IwanForm, JointForm, phi_max_of
 
 __all__ = ["BASE_PARAMETERS", "phi_max_of", "LinearPart", "LevelPrediction", "FELevels",
-           "Simulator", "level_entries", "abscissa_of", "rayleigh_expectation"]
+           "Simulator", "abscissa_of", "rayleigh_expectation"]
 
 #: The base model's parameters, in the order the fits use.
 BASE_PARAMETERS = ("chi", "ln_dc1", "zeta_v", "f0_hz")
@@ -151,6 +151,8 @@ class FELevels:
     label = "FE model"
     #: how the joints' law enters (:mod:`feloop.joint_forms`; set by the case)
     form: JointForm = IwanForm()
+    #: another mode's model whose joints this one takes (:mod:`feloop.modes`)
+    joint_source: "FELevels | None" = None
 
     def __init__(self, excitation, run_order, omega2_1: float, zeta_1: float,
                  force_scale: float = 1.0, n_modes: int = N_MODES, abscissa: str = "force",
@@ -177,7 +179,6 @@ class FELevels:
     def reset(self) -> None:
         """Forget the warm starts (results then depend on no earlier call)."""
         self._warm = {}
-
     @classmethod
     def from_data(cls, data, **kw) -> "FELevels":
         """From a one-mode :class:`ident.modal_data.MeasuredData` (levels sorted): the
@@ -216,7 +217,10 @@ class FELevels:
         """The joints of parameter set ``p`` (:meth:`feloop.joint_forms.JointForm.joint`:
         ``K_T, F_S, slip_scale``, the law's own figures, ``chi, R, beta, phi_max`` for
         Iwan joints; ``params``, the same objects for the same joint parameters: the last
-        256 kept) and ``linear``, the model they sit on."""
+        256 kept) and ``linear``, the model they sit on (a :attr:`joint_source`'s joints)."""
+        if self.joint_source is not None:
+            j = self.joint_source.joint(p)
+            return {**j, "linear": self.linear(j["K_T"])}
         lin = self.linear(10.0 ** float(p.get("log10_kt", math.log10(self.default_kt))))
         key = (round(math.log10(lin.K_T), 9),) + self.form.key(p)
         if key not in self._joints:
@@ -384,17 +388,3 @@ class Simulator:
 
     def reset(self) -> None:
         self.fe.reset()
-
-
-def level_entries(data, mask, models: dict) -> list:
-    """One dict per level of ``data``: ``level``, ``held_out`` (not in ``mask``), ``measured``
-    and each of ``models`` (name -> LevelPrediction), each as ``{frequency_hz, zeta}``."""
-    f_meas = np.sqrt(data.omega2) / (2 * math.pi)
-    rows = []
-    for i, lv in enumerate(data.level):
-        row = {"level": int(lv), "held_out": bool(not mask[i]),
-               "measured": {"frequency_hz": float(f_meas[i]), "zeta": float(data.zeta[i])}}
-        for name, pred in models.items():
-            row[name] = {"frequency_hz": float(pred.frequency_hz[i]), "zeta": float(pred.zeta[i])}
-        rows.append(row)
-    return rows

@@ -16,9 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from feloop.causes import force_scale_power
-from feloop.diagnosis import unconverged_fits
+from feloop.diagnosis import level_entries, unconverged_fits
 from feloop.given_model import data_block, fit_block
-from feloop.levels import level_entries
 from feloop.tie import tie_statement
 from feloop.update_text import LABEL, format_text, markdown
 from inverse.fe_selection import fit_test_of

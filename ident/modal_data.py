@@ -168,6 +168,21 @@ class MeasuredData:
             extra={k: v[index] for k, v in self.extra.items()}, line=self.line[index],
             warnings=list(self.warnings))
 
+    @classmethod
+    def concatenate(cls, parts: list) -> "MeasuredData":
+        """One table of the entries of ``parts`` in order (e.g. one mode each); a column
+        only some parts have is left out (``extra``: the columns all have)."""
+        def cat(name):
+            cols = [getattr(p, name) for p in parts]
+            return None if any(c is None for c in cols) else np.concatenate(cols)
+
+        keys = set.intersection(*(set(p.extra) for p in parts))
+        return cls(**{n: cat(n) for n in ("level", "excitation", "omega2", "zeta", "mode",
+                                          "run_order", "response_amplitude", "omega2_std",
+                                          "zeta_std", "control", "test", "line")},
+                   extra={k: np.concatenate([p.extra[k] for p in parts]) for k in sorted(keys)},
+                   warnings=[w for p in parts for w in p.warnings])
+
     def for_mode(self, m: int) -> "MeasuredData":
         """Entries of mode ``m`` sorted by level (repeats by run order); ValueError if
         the mode is absent."""

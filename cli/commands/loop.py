@@ -45,6 +45,13 @@ def register(subparsers) -> None:
         "predictions against the measured values in noise sd, rms at its fit levels and "
         "at the others (the loop's fits start from the data, not from a nominal joint, "
         "so the model does not change them); a model of another case or data: exit 2"))
+    parser.add_argument("--fit-modes", default=None, metavar="M1[,M2]",
+                        help="one joint fitted to these measured modes (every level) instead "
+                             "of the one-mode loop; with --predict-modes the others are "
+                             "predicted from it at every level, with intervals, and judged")
+    parser.add_argument("--predict-modes", default=None, metavar="M1[,M2]",
+                        help="modes predicted from the joint of --fit-modes (their viscous "
+                             "damping and stuck frequency calibrated to their lowest level)")
     add_executor_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -53,6 +60,17 @@ def run(args) -> int:
     from cases.loop_report import format_summary, run_loop
     from cases.registry import resolve_case
 
+    if args.predict_modes is not None and args.fit_modes is None:
+        raise ValueError("--predict-modes needs --fit-modes")
+    if args.fit_modes is not None:
+        from cli.commands.update import run_modes
+        from feloop.modes_run import parse_modes
+
+        args.out = str(validate.output_dir(args.out, "--out"))
+        args.data, args.force_scale = None, 1.0
+        return run_modes(args, parse_modes(args.fit_modes, "--fit-modes"),
+                         parse_modes(args.predict_modes, "--predict-modes")
+                         if args.predict_modes else ())
     case = resolve_case(args.case)
     case.require("update")
     out = validate.output_dir(args.out, "--out")

@@ -52,6 +52,12 @@ def register(subparsers) -> None:
                         help="measured-data CSV (default: the case's measured data)")
     parser.add_argument("--mode", type=int, default=None,
                         help="mode label in the data (default: the case's)")
+    parser.add_argument("--modes", default=None, metavar="M1,M2",
+                        help="fit one joint to several measured modes (labels in the data; "
+                             "the first is the reference): one set of joint parameters, each "
+                             "mode its own viscous damping and stuck frequency; reports each "
+                             "mode's fit test and whether one joint explains them "
+                             "(docs/case-file-loop.md)")
     parser.add_argument("--fit-levels", default=None,
                         help="levels fitted, others predicted (default: the case's)")
     parser.add_argument("--force-scale", type=_positive, default=1.0, metavar="N_PER_UNIT",
@@ -73,10 +79,36 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def run_modes(args, fit_modes, predict_modes=()) -> int:
+    """One joint over several modes (``update --modes``, ``loop --fit-modes``)."""
+    from cases.registry import resolve_case
+    from feloop.modes_report import format_text, summary, write_modes
+
+    run = resolve_case(args.case).require("update_modes")
+    r = run(fit_modes=fit_modes, predict_modes=predict_modes, data_path=args.data,
+            fit_levels=getattr(args, "fit_levels", None), force_scale=args.force_scale,
+            rig_repeatability=rig_from_args(args))
+    if args.out:
+        write_modes(r, args.out)
+    s = summary(r)
+    if args.json:
+        print_json(s)
+    else:
+        print(format_text(s))
+        if args.out:
+            print(f"report: {Path(args.out) / 'report.md'}")
+    return 0
+
+
 def run(args) -> int:
     from feloop.update_report import format_text, summary, write_update
     from cases.registry import resolve_case
+    from feloop.modes_run import parse_modes
 
+    if args.modes is not None:
+        if args.mode is not None or args.assumptions or args.profiles != "bound":
+            raise ValueError("--modes takes none of --mode, --assumptions, --profiles all")
+        return run_modes(args, parse_modes(args.modes))
     update = resolve_case(args.case).require("update")
     spec = executor_from_args(args)
     store = None if args.out is None else str(Path(args.out) / "profiles")
