@@ -90,6 +90,7 @@ def simulate(case, seed: int) -> tuple[MeasuredData, dict]:
             for i in cf.interfaces))
     model = case.fe_model()
     nc = nonlinear_case(cf, model)
+    nc.require_point_drive("the stepped-sine virtual test (cases.stepped_sine_test)")
     red, k = nc.model, nc.mode - 1
     phi = red.basis[:, k]
     omega = float(red.omega[k])
@@ -131,7 +132,11 @@ def main(argv=None) -> int:
     from ident.measured import write_measured
 
     case_file, out, seed = (argv if argv is not None else sys.argv[1:])[:3]
-    data, truth = simulate(resolve_case(case_file), int(seed))
+    try:
+        data, truth = simulate(resolve_case(case_file), int(seed))
+    except ValueError as exc:       # a bad file, a base drive: one line, status 2
+        print(f"cases.stepped_sine_test: error: {exc}", file=sys.stderr)
+        return 2
     write_measured(out, data)
     print(f"wrote {out} (simulated): truth {truth}")
     return 0

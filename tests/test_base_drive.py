@@ -268,3 +268,41 @@ def test_frc_base_drive_one_line_errors(capsys, argv, words):
 def test_frc_acceleration_needs_a_base_drive(capsys):
     code, out, err = run_cli(capsys, "frc", "--acceleration", "1")
     assert code == 2 and "--acceleration needs a base-driven --case" in err
+
+
+# ------------------------------------------------------------------ refusals
+@pytest.mark.parametrize("argv, what", [
+    (["backbone", "--case", LAP], "backbone"),
+    (["ringdown", "--case", LAP, "--mode", "1"], "ringdown"),
+])
+def test_commands_without_base_drive_refuse_it(capsys, argv, what):
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert f"base drive not supported by {what} yet" in err
+
+
+def test_the_fe_loop_refuses_a_base_drive(tmp_path, capsys):
+    """A base-driven file with measured levels: ``case check`` reads it, ``update`` says
+    the FE loop does not take a base drive (it fits levels driven at a point)."""
+    csv = Path("docs/case-files/bolted-lap-cantilever-levels.csv")
+    (tmp_path / csv.name).write_text(csv.read_text())
+    path = _write(tmp_path, TEXT + f'\n[measured]\nfile = "{csv.name}"\nmode = 2\n')
+    assert run_cli(capsys, "case", "check", path)[0] == 0
+    code, out, err = run_cli(capsys, "update", "--case", path, "--out", tmp_path / "u")
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "base drive not supported by the FE loop" in err
+
+
+@pytest.mark.parametrize("module, argv", [
+    ("cases.virtual_test", ["OUT"]),
+    ("cases.stepped_sine_test", ["OUT", "1"]),
+])
+def test_virtual_tests_refuse_a_base_drive(tmp_path, capsys, module, argv):
+    import importlib
+
+    out = str(tmp_path / "levels.csv")
+    code = importlib.import_module(module).main([str(LAP), *[out if a == "OUT" else a
+                                                             for a in argv]])
+    err = capsys.readouterr().err
+    assert code == 2 and "base drive not supported by" in err and "yet" in err
+    assert len(err.strip().splitlines()) == 1 and not Path(out).exists()
