@@ -173,9 +173,9 @@ def test_cantilever_low_frequency_limit_is_the_closed_form(tmp_path):
     for ratio in (1e-2, 1e-3):
         w = ratio * w1
         x = la.solve(K - w * w * M, a * base_load(model))
-        assert abs(x[tip] / closed - 1) < 2 * ratio ** 2       # first correction ~ 0.1 (w/w1)^2
+        assert abs(x[tip] / closed - 1) < 2 * ratio ** 2       # measured 1.013 (w/w1)^2
     static = la.solve(K, a * base_load(model))[tip]
-    assert abs(static / closed - 1) < 1e-10                    # measured 3e-15
+    assert abs(static / closed - 1) < 1e-9                     # measured 2.7e-11 (round-off)
     free_only = la.solve(K, -a * (model.M @ np.where(model.free % 3 == W, 1.0, 0.0)))[tip]
     assert abs(free_only / closed - 1) > 1e-6                   # measured 2.2e-5
 
@@ -235,24 +235,26 @@ def test_frc_linear_limit_is_the_fe_base_excitation_frf(tmp_path, capsys):
 
 def test_frc_through_resonance_is_the_damped_fe_frf(capsys):
     """The file's ``zeta = 0.005`` through the first resonance: the full model damped by
-    the same ratio on its own modes, ``C = M Phi diag(2 zeta omega) Phi^T M``. Within 1e-6
-    (measured 3e-7: the two eigen-solutions' round-off in C, which the resonance
-    magnifies by 1/(2 zeta))."""
+    the same ratio on its own modes, ``C = M Phi diag(2 zeta omega) Phi^T M``, the modes
+    from the dense inverse problem ``M phi = mu K phi`` (``omega^2 = 1/mu``: accurate for
+    the low modes; the dense ``K phi = lambda M phi`` of this stiffly tied model is 6.7e-7
+    off in ``omega_1^2``, which the resonance showed as 3.3e-7). Within 3e-7 (measured
+    8.2e-8 over every point, median 5.8e-9: round-off at the resonance)."""
     cf = read_case_file(LAP)
     model = build_model(cf).model
     K, M = model.K.toarray(), model.M.toarray()
-    lam, V = la.eigh(K, M)
+    mu, V = la.eigh(M, K)
+    V = V / np.sqrt(np.einsum("ij,ij->j", V, M @ V))         # mass-normalized
     MV = M @ V
-    C = MV @ np.diag(2 * 0.005 * np.sqrt(lam)) @ MV.T
+    C = MV @ np.diag(2 * 0.005 / np.sqrt(mu)) @ MV.T
     A = 1e-3
     d = _frc(capsys, LAP, "--acceleration", A)
     pts = d["curves"][0]["points"]
     amp = np.array([p["amplitude"] for p in pts])
-    i = int(np.argmax(amp))
-    pick = sorted({0, i, len(pts) - 1, i // 2, (i + len(pts)) // 2})
-    w = 2 * np.pi * np.array([pts[k]["frequency_hz"] for k in pick])
+    assert amp.max() > 10 * amp[0]                              # through the resonance (19x)
+    w = 2 * np.pi * np.array([p["frequency_hz"] for p in pts])
     ref = A * np.abs(fe_base_frf(cf, model, w, C))
-    assert np.max(np.abs(amp[pick] - ref) / ref) < 1e-6
+    assert np.max(np.abs(amp - ref) / ref) < 3e-7
     assert all(p["stable"] for p in pts)
 
 
