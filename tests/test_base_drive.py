@@ -308,3 +308,14 @@ def test_virtual_tests_refuse_a_base_drive(tmp_path, capsys, module, argv):
     err = capsys.readouterr().err
     assert code == 2 and "base drive not supported by" in err and "yet" in err
     assert len(err.strip().splitlines()) == 1 and not Path(out).exists()
+
+
+def test_frc_exact_path_takes_the_base_drive(capsys):
+    """``--path exact`` (the law marched by its step; it called the law property before,
+    a TypeError for every case) equals the bank path with the joints stuck."""
+    argv = ("--acceleration", "1e-3", "--range", "14", "16", "--n-time", "32")
+    exact = _frc(capsys, LAP, "--path", "exact", *argv)["curves"][0]["points"]
+    bank = _frc(capsys, LAP, "--path", "bank", *argv)["curves"][0]["points"]
+    a = np.array([p["amplitude"] for p in exact])
+    b = np.array([p["amplitude"] for p in bank])
+    assert a.shape == b.shape and np.max(np.abs(a - b) / b) < 1e-12

@@ -131,7 +131,7 @@ def _case_model(args):
     if args.mode is not None and args.mode < 1:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
     case = case_of(args).nonlinear_model(mode=args.mode)
-    law = case.bank if args.path == "bank" else case.law()
+    law = case.bank if args.path == "bank" else case.law
     if law is None:
         raise ValueError(f"{case.name}: no Jenkins banks for law {case.law_name} (use "
                          f"--path exact)")
