@@ -40,7 +40,9 @@ def register(subparsers) -> None:
             "the low end of the range (folds located by the tangent), stability of every "
             "point by Hill's method. Per point: frequency_hz, amplitude (first harmonic "
             "of x, m), peak (half peak-to-peak of x, m), max_multiplier (largest Floquet "
-            "multiplier modulus), stable. --json prints one curve per force."),
+            "multiplier modulus), stable. --json prints one curve per force. A case file "
+            "with [drive] kind = \"base\" is driven by its base (--acceleration, m/s^2; "
+            "amplitudes relative to the base)."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--force", type=float, nargs="+", default=None, metavar="F",
                         help="drive amplitudes (N), one curve each (required, unless "
