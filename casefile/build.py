@@ -50,6 +50,7 @@ import scipy.sparse as sp
 from casefile.nodes import (  # node placement; its names stay importable from here too
     NODE_TOLERANCE, SNAP_FRACTION, StripNodes, breakpoints, joint_positions, node_positions,
     snap_distance)
+from casefile.spec import is_base_drive
 from casefile.tables import CaseFileError
 from fe.assembly import coupling_rows
 from fe.beam import THETA, U, W
@@ -279,7 +280,8 @@ def _point_dofs(cf, nodes: StripNodes, is_free: np.ndarray) -> tuple[list, list,
         if p.mass > 0:
             mass_dofs += [nodes.dof(p.beam, p.x, W), nodes.dof(p.beam, p.x, U)]
             masses += [p.mass, p.mass]
-    drive = cf.drive or (cf.sensors[0] if cf.sensors else None)
+    drive = cf.drive if cf.drive is not None and not is_base_drive(cf.drive) else \
+        (cf.sensors[0] if cf.sensors else None)   # a base drive: its response point
     drive_dof = nodes.dof(drive.beam, drive.x, W) if drive else _last_free_w(is_free)
     response = cf.sensors[0] if cf.sensors else drive
     response_dof = nodes.dof(response.beam, response.x, W) if response else drive_dof

@@ -49,6 +49,13 @@ class NonlinearCase:
         case study's)
     harmonics, n_time : the bank path's harmonics and AFT samples
     law_name : ``iwan4``, ``jenkins`` or ``bouc-wen`` (module docstring)
+    drive_kind : ``point`` (a force at ``drive_dof``) or ``base`` (``[drive] kind =
+        "base"``: the supports move as one base; ``drive_dof`` is then the response DOF
+        and means nothing, :meth:`load` refuses)
+    base_acceleration : the file's base acceleration amplitude (m/s^2; base drive)
+    base_load : (r,) reduced load per m/s^2 of base acceleration, ``Phi^T (-(M_all
+        r)_free)`` (:func:`fe.base_excitation.base_load`; base drive); responses are
+        relative to the base
     """
 
     name: str
@@ -71,6 +78,9 @@ class NonlinearCase:
     harmonics: tuple = (1, 3, 5, 7)
     n_time: int = 256
     law_name: str = "iwan4"
+    drive_kind: str = "point"
+    base_acceleration: float | None = None
+    base_load: np.ndarray | None = None
 
     def joint_harmonics(self, path: str):
         """The joints on ``path`` (``bank`` or ``exact``, :func:`fe.joint_harmonics.joint_path`);
@@ -111,6 +121,15 @@ class NonlinearCase:
             raise ValueError(f"{self.name}: {what} needs Iwan joints (law iwan4); the law "
                              f"here is {self.law_name}")
 
+    def require_point_drive(self, what: str) -> None:
+        """ValueError (one line) when the case is base-driven and ``what`` (a command)
+        knows only a point force."""
+        if self.drive_kind != "point":
+            raise ValueError(f"{self.name}: base drive not supported by {what} yet "
+                             f"([drive] kind = \"{self.drive_kind}\"; iwanfe frc takes it)")
+
     def load(self) -> np.ndarray:
-        """Reduced unit load at the drive DOF (``Phi^T e_d``)."""
+        """Reduced unit load at the drive DOF (``Phi^T e_d``); ValueError for a base
+        drive (no drive point: :attr:`base_load`)."""
+        self.require_point_drive("this command (it drives a point)")
         return np.asarray(self.model.basis[self.drive_dof], dtype=float).copy()

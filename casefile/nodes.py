@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from casefile.spec import is_base_drive
 from casefile.tables import CaseFileError
 from fe.mesh import DofMap, segmented_line_mesh
 
@@ -43,7 +44,7 @@ def _named_x(cf) -> tuple[list, list]:
             points += [(v, f"interface.{i}.{key}") for v in joint_positions(itf)]
     points += [(p.x, f"mass.{i}.x") for i, p in enumerate(cf.masses)]
     points += [(p.x, f"sensor.{i}.x") for i, p in enumerate(cf.sensors)]
-    points += [(cf.drive.x, "drive.x")] if cf.drive else []
+    points += [(cf.drive.x, "drive.x")] if cf.drive and not is_base_drive(cf.drive) else []
     return structural, points
 
 

@@ -10,7 +10,9 @@ interface's at every element: ``iwan4``: ``IwanParameters(chi, kt w_j, fs w_j, b
 time-domain law; ``bouc-wen``: ``BoucWenJoints`` (no bank: time domain by its own step).
 All joint interfaces take one law. The structure: :func:`fe.reduction.ritz_basis`
 (stuck-joint modes plus static joint modes) with the file's modal damping ratio
-``[damping] zeta``. SI units.
+``[damping] zeta``; a base drive (``[drive] kind = "base"``) adds the static response to
+the base's inertia load ``-(M_all r)_free`` (:mod:`fe.base_excitation`) to the basis and
+carries that load reduced (``base_load``, per m/s^2). SI units.
 """
 from __future__ import annotations
 
@@ -20,6 +22,8 @@ import scipy.sparse as sp
 from casefile.build import joint_shares
 from casefile.jointed import NonlinearCase
 from casefile.laws import law_keys, joint_law
+from casefile.spec import is_base_drive
+from fe.base_excitation import base_load, enrich_basis
 from fe.reduction import JointBank, JointedSystem, ritz_basis
 from ident.errors import InputError
 from joints.iwan import IwanParameters
@@ -86,6 +90,12 @@ def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
     system = JointedSystem(M=model.M, K=model.K_without_joints, C=sp.csr_matrix((n, n)),
                            G=model.slip_matrix, K_T=model.joint_stiffness)
     red = ritz_basis(system, min(N_RITZ_MODES, n - model.joint_stiffness.size - 2), cf.zeta)
+    base = {}
+    if is_base_drive(cf.drive):      # the base's inertia load and its static response
+        f_b = base_load(model)
+        red = enrich_basis(red, system, f_b, cf.zeta)
+        base = {"drive_kind": "base", "base_acceleration": float(cf.drive.acceleration),
+                "base_load": red.load(f_b)}
     itfs = [i for i in cf.interfaces if i.tangential == "joint"]
     joints = joint_law(itfs, [joint_shares(i) for i in itfs])
     if law == "iwan4":
@@ -111,4 +121,4 @@ def nonlinear_case(cf, model, mode: int | None = None) -> NonlinearCase:
         force=DEFAULT_FORCES.copy(), lines_hz=np.linspace(0.9 * f, 1.1 * f, 81),
         band_hz=(0.9 * f, 1.1 * f),
         joint_source=_joint_source(cf) + ": " + "; ".join(_given(i) for i in itfs),
-        law_name=law)
+        law_name=law, **base)

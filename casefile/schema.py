@@ -23,6 +23,7 @@ from pathlib import Path
 
 from casefile.spec import (Beam, Calibrate, CaseFile, Interface, Material, Measured,
                                  PointMass, Section, Support)
+from casefile.drive import read_drive
 from casefile.laws import LAW_KEYS, LAWS, law_keys
 from casefile.tables import CaseFileError, Table
 from ident.units import HINT, suspect
@@ -104,7 +105,7 @@ class _Reader:
         masses = tuple(self.point(t, by_name, "mass") for t in self.tables("mass"))
         sensors = tuple(self.point(t, by_name, "sensor") for t in self.tables("sensor"))
         t = self.table("drive")
-        drive = self.point(t, by_name, "drive") if t is not None else None
+        drive = read_drive(self, t, by_name, supports) if t is not None else None
         element_size = self.mesh()
         zeta = self.damping()
         measured = self.measured()

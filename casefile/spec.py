@@ -77,6 +77,23 @@ class PointMass:
 
 
 @dataclass(frozen=True)
+class BaseDrive:
+    """``[drive] kind = "base"``: every support moves as one base in transverse
+    translation ``w_b(t)``, with acceleration ``a_b(t) = Re(acceleration e^{i w t})``
+    (``acceleration``: amplitude, m/s^2). In coordinates relative to the base the load
+    is ``f = -M r a_b`` (``r``: 1 on every node's ``w``, 0 on ``u`` and ``theta``;
+    :mod:`fe.base_excitation`)."""
+
+    acceleration: float
+    kind: str = "base"
+
+
+def is_base_drive(drive) -> bool:
+    """True for a ``[drive] kind = "base"`` (a :class:`BaseDrive`)."""
+    return isinstance(drive, BaseDrive)
+
+
+@dataclass(frozen=True)
 class Measured:
     """``[measured]``: ``files`` (a measured-data table, the FRF files of a series or a
     free-decay record; () when only the linear frequency is given), ``mode``,
@@ -114,7 +131,7 @@ class CaseFile:
     interfaces: tuple
     masses: tuple
     sensors: tuple
-    drive: PointMass | None
+    drive: PointMass | BaseDrive | None      # a point drive, or the base (kind = "base")
     measured: Measured | None
     calibrate: Calibrate | None
     element_size: float

@@ -15,6 +15,7 @@ from feloop import case_file as fe_loop
 from casefile.calibrate import calibrate
 from casefile.nonlinear import missing_joint_parameters, nonlinear_case
 from casefile.schema import read_case_file
+from casefile.spec import is_base_drive
 from casefile.summary import case_summary
 
 
@@ -34,6 +35,16 @@ class CaseFileCase(Case):
         if fe_loop.qualifies(cf):
             out += ["fe_levels", "update", "update_modes", "fe_uncertainty"]
         return tuple(out)
+
+    @property
+    def refused(self) -> dict:
+        """A base drive (``[drive] kind = "base"``): the FE loop knows a point force only."""
+        cf = self.file
+        if not (is_base_drive(cf.drive) and cf.measured is not None and cf.measured.files):
+            return {}
+        why = (f"{cf.path}: base drive not supported by the FE loop (update, loop, diagnose "
+               f"--case, uncertainty) yet: it fits levels driven at a point")
+        return dict.fromkeys(("fe_levels", "fe_check", "update", "fe_uncertainty"), why)
 
     def _calibrated_file(self, element_size=None, calibrated=True):
         """(the file at ``element_size``, calibrated unless told not to; its report)."""

@@ -68,7 +68,9 @@ def ringdown_case(name: str, mode: int, model=None):
     case (its ``nonlinear_model`` capability, :mod:`cases.case`)."""
     from cases.registry import resolve_case
 
-    return resolve_case(name, model=model).nonlinear_model(mode=mode)
+    case = resolve_case(name, model=model).nonlinear_model(mode=mode)
+    case.require_point_drive("ringdown")      # its impulse and its drive amplitude
+    return case
 
 
 def settings_hash(case, settings: RingdownSettings) -> str:

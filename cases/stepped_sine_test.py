@@ -103,6 +103,7 @@ def simulate(case, seed: int, mode: int | None = None,
             raise ValueError(f"{cf.path}: no bending mode {mode} among the model's modes")
     nc = nonlinear_case(cf, model, mode=None if mode is None else
                         int(np.flatnonzero(order == int(mode))[0]) + 1)
+    nc.require_point_drive("the stepped-sine virtual test (cases.stepped_sine_test)")
     red, k = nc.model, nc.mode - 1
     phi = red.basis[:, k]
     omega = float(red.omega[k])
@@ -151,13 +152,17 @@ def main(argv=None) -> int:
         top = float(args[i + 1])
         del args[i:i + 2]
     case_file, out, seed = args[:3]
-    if len(args) < 4:
-        data, truth = simulate(resolve_case(case_file), int(seed), top_slip=top)
-    else:          # several bending modes, each with its own noise (seed + 100 mode)
-        parts = [simulate(resolve_case(case_file), int(seed) + 100 * m, mode=m, top_slip=top)
-                 for m in (int(t) for t in args[3].split(","))]
-        data = MeasuredData.concatenate([d for d, _ in parts])
-        truth = [t for _, t in parts]
+    try:
+        if len(args) < 4:
+            data, truth = simulate(resolve_case(case_file), int(seed), top_slip=top)
+        else:      # several bending modes, each with its own noise (seed + 100 mode)
+            parts = [simulate(resolve_case(case_file), int(seed) + 100 * m, mode=m,
+                              top_slip=top) for m in (int(t) for t in args[3].split(","))]
+            data = MeasuredData.concatenate([d for d, _ in parts])
+            truth = [t for _, t in parts]
+    except ValueError as exc:       # a bad file, a base drive: one line, status 2
+        print(f"cases.stepped_sine_test: error: {exc}", file=sys.stderr)
+        return 2
     write_measured(out, data)
     print(f"wrote {out} (simulated): truth {truth}")
     return 0

@@ -19,6 +19,7 @@ from ident.modal_data import MeasuredData
 def campaign(nc, forces=None):
     """:class:`fe.hb_resonance.ResonanceLevels` of mode ``nc.mode`` at ``forces`` (N,
     default ``nc.force``) on the drive point of ``nc`` (:class:`NonlinearCase`)."""
+    nc.require_point_drive("the virtual stepped-sine test (cases.virtual_test)")
     forces = nc.force if forces is None else np.asarray(forces, dtype=float)
     return resonance_levels(nc.model, nc.joints, nc.load(), forces, nc.mode - 1)
 
@@ -39,7 +40,12 @@ def main(argv=None) -> int:
     from ident.measured import write_measured
 
     case_name, out = (argv if argv is not None else sys.argv[1:])[:2]
-    write_measured(out, simulated_table(resolve_case(case_name).nonlinear_model()))
+    try:
+        table = simulated_table(resolve_case(case_name).nonlinear_model())
+    except ValueError as exc:       # a bad file, a base drive: one line, status 2
+        print(f"cases.virtual_test: error: {exc}", file=sys.stderr)
+        return 2
+    write_measured(out, table)
     print(f"wrote {out} (simulated)")
     return 0
 

@@ -4,7 +4,7 @@ of :func:`feloop.select.fe_select` choosing the model), the assumed properties
 ``update --assumptions`` changes (:func:`assumption_variants`) and ``uncertainty``
 (:func:`feloop.uncertainty.run_fe_uncertainty` on it), for a file whose joint
 interfaces have one law (``iwan4``, ``jenkins`` or ``bouc-wen``: :mod:`feloop.joint_forms`)
-and a ``kt``, with a ``[drive]`` and a ``[measured]`` table.
+and a ``kt``, with a point ``[drive]`` (not ``kind = "base"``) and a ``[measured]`` table.
 
 Defaults a command may override: the data are the file's table, the mode label the
 file's ``[measured] mode`` when the table has it (else the table's only mode label),
@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from casefile.parameters import get_parameter, set_parameter
 from casefile.plausibility import joint_plausibility
+from casefile.spec import is_base_drive
 from ident.errors import InputError
 
 __all__ = ["qualifies", "levels_builder", "assumption_variants",
@@ -35,7 +36,8 @@ def qualifies(cf) -> bool:
     law (:mod:`feloop.joint_forms`), each with a ``kt``, a drive and measured data."""
     joints = [i for i in cf.interfaces if i.tangential == "joint"]
     return bool(joints) and all(i.kt for i in joints) and len({i.law for i in joints}) == 1 \
-        and cf.drive is not None and cf.measured is not None and bool(cf.measured.files)
+        and cf.drive is not None and not is_base_drive(cf.drive) \
+        and cf.measured is not None and bool(cf.measured.files)
 
 
 @dataclass(frozen=True)

@@ -79,6 +79,7 @@ def run(args) -> int:
     if args.mode is not None and args.mode < 1:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
     case = case_of(args).nonlinear_model(mode=args.mode)
+    case.require_point_drive("backbone")    # its drive amplitude and force at resonance
     if args.compare:
         case.require_iwan("--compare (the Iwan estimator against the true joint)")
         return _compare(case, args)

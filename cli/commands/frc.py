@@ -9,6 +9,10 @@ amplitude (first harmonic of x, m), peak (half peak-to-peak of x, m), the larges
 multiplier modulus and ``stable``; ``--json`` prints the curves. ``--case NAME|FILE``
 takes a case's jointed model instead (driven and observed at its drive DOF; ``--path
 bank``: its Jenkins banks with the compiled AFT, ``exact``: its law marched by its step).
+A case file with ``[drive] kind = "base"`` is driven by its base instead: the load
+``A Phi^T (-(M_all r)_free)`` (:mod:`fe.base_excitation`) at the file's acceleration
+amplitude ``A`` (m/s^2) or at ``--acceleration``, observed at its sensor; amplitudes are
+relative to the base (the JSON's ``drive`` and ``amplitude_is`` say so).
 """
 from __future__ import annotations
 
@@ -36,10 +40,17 @@ def register(subparsers) -> None:
             "the low end of the range (folds located by the tangent), stability of every "
             "point by Hill's method. Per point: frequency_hz, amplitude (first harmonic "
             "of x, m), peak (half peak-to-peak of x, m), max_multiplier (largest Floquet "
-            "multiplier modulus), stable. --json prints one curve per force."),
+            "multiplier modulus), stable. --json prints one curve per force. A case file "
+            "with [drive] kind = \"base\" is driven by its base (--acceleration, m/s^2; "
+            "amplitudes relative to the base)."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--force", type=float, nargs="+", required=True, metavar="F",
-                        help="drive amplitudes (N), one curve each")
+    parser.add_argument("--force", type=float, nargs="+", default=None, metavar="F",
+                        help="drive amplitudes (N), one curve each (required, unless "
+                             "--case is base-driven)")
+    parser.add_argument("--acceleration", type=float, nargs="+", default=None, metavar="A",
+                        help="with a base-driven --case ([drive] kind = \"base\"): base "
+                             "acceleration amplitudes (m/s^2), one curve each (default: the "
+                             "file's)")
     parser.add_argument("--case", default=None, metavar="NAME|FILE",
                         help="a case's jointed model instead of the one-DOF oscillator "
                              "(shipped case or case file; driven and observed at its drive "
@@ -96,8 +107,14 @@ def _model(args):
 
 
 def _check(args):
-    if not args.force or not all(math.isfinite(f) and f > 0 for f in args.force):
-        raise ValueError(f"--force must be finite and > 0, got {args.force}")
+    for name in ("force", "acceleration"):
+        v = getattr(args, name)
+        if v is not None and not (v and all(math.isfinite(f) and f > 0 for f in v)):
+            raise ValueError(f"--{name} must be finite and > 0, got {v}")
+    if args.acceleration is not None and args.case is None:
+        raise ValueError("--acceleration needs a base-driven --case ([drive] kind = \"base\")")
+    if args.force is None and args.case is None:
+        raise ValueError("--force is required (drive amplitudes, N)")
     if not (args.harmonics >= 1 and args.harmonics % 2 == 1 and args.harmonics <= 31):
         raise ValueError(f"--harmonics must be an odd number in 1..31, got {args.harmonics}")
     if args.n_time < 4 * args.harmonics + 4 or args.n_time > 8192:
@@ -116,16 +133,18 @@ def _case_model(args):
     if args.mode is not None and args.mode < 1:
         raise ValueError(f"--mode must be >= 1, got {args.mode}")
     case = case_of(args).nonlinear_model(mode=args.mode)
-    law = case.bank if args.path == "bank" else case.law()
+    law = case.bank if args.path == "bank" else case.law
     if law is None:
         raise ValueError(f"{case.name}: no Jenkins banks for law {case.law_name} (use "
                          f"--path exact)")
     return case, law
 
 
-def _curve(model, law, F: float, load, band_hz, settings, observe=None) -> dict:
-    """One force's curve (:func:`fe.frc.forced_response` over ``band_hz``, Hz) as the
-    JSON's ``curves`` entry; a steady state not found is one line naming the force."""
+def _curve(model, law, F: float, load, band_hz, settings, observe=None,
+           key: str = "force_N") -> dict:
+    """One drive amplitude's curve (:func:`fe.frc.forced_response` over ``band_hz``, Hz)
+    as the JSON's ``curves`` entry (``key``: ``force_N``, or ``acceleration_m_s2`` for a
+    base drive); a steady state not found is one line naming the amplitude."""
     from fe.frc import forced_response
     from fe.newton_path import SteadyStateError
 
@@ -134,8 +153,9 @@ def _curve(model, law, F: float, load, band_hz, settings, observe=None) -> dict:
         r = forced_response(model, law, load, (2 * math.pi * lo, 2 * math.pi * hi),
                             observe=observe, settings=settings)
     except SteadyStateError as exc:
-        raise ValueError(f"force {F:g} N: {exc}") from None
-    return {"force_N": F, "points": r.to_points(),
+        what = f"force {F:g} N" if key == "force_N" else f"base acceleration {F:g} m/s^2"
+        raise ValueError(f"{what}: {exc}") from None
+    return {key: F, "points": r.to_points(),
             "folds": [{"frequency_hz": f["frequency_hz"], "amplitude": f["amplitude"],
                        "peak": f["peak"]} for f in r.folds]}
 
@@ -176,7 +196,9 @@ def _print_curves(curves) -> None:
     """The text table of every curve."""
     for c in curves:
         folds = ", ".join(f"{f['frequency_hz']:.6g} Hz" for f in c["folds"]) or "none"
-        print(f"force {c['force_N']:g} N: {len(c['points'])} points, folds: {folds}")
+        amp = (f"force {c['force_N']:g} N" if "force_N" in c
+               else f"base acceleration {c['acceleration_m_s2']:g} m/s^2")
+        print(f"{amp}: {len(c['points'])} points, folds: {folds}")
         floq = any("floquet_multiplier" in q for q in c["points"])
         print("  frequency_hz    amplitude_m       peak_m   max|mu|  stable"
               + ("  floquet|mu|" if floq else ""))
@@ -186,11 +208,32 @@ def _print_curves(curves) -> None:
                   + (f"  {q['floquet_multiplier']:11.5f}" if floq else ""))
 
 
+def _drive(args, case) -> tuple[list, np.ndarray, str, dict]:
+    """The case's drive: amplitudes (N or m/s^2), reduced unit load, the curves' key and
+    the JSON's drive entries; ValueError (one line) on options of the other drive."""
+    if case.drive_kind == "base":
+        if args.force is not None:
+            raise ValueError(f"{case.name} is base-driven ([drive] kind = \"base\"): give "
+                             f"--acceleration (m/s^2), not --force")
+        acc = args.acceleration or [case.base_acceleration]
+        return acc, case.base_load, "acceleration_m_s2", {
+            "drive": {"kind": "base", "acceleration_m_s2": case.base_acceleration},
+            "amplitude_is": "relative to the base"}
+    if args.acceleration is not None:
+        raise ValueError(f"--acceleration needs a base-driven case ([drive] kind = "
+                         f"\"base\"); {case.name} is driven at a point: give --force")
+    if args.force is None:
+        raise ValueError("--force is required (drive amplitudes, N)")
+    return args.force, case.load(), "force_N", {}
+
+
 def _run_case(args) -> int:
-    """``--case``: the same curves for a case's jointed model at its drive DOF."""
+    """``--case``: the same curves for a case's jointed model at its drive DOF (or driven
+    by its base, observed at its response DOF)."""
     from fe.frc import FRCSettings
 
     case, law = _case_model(args)
+    amplitudes, load, key, drive = _drive(args, case)
     model = case.model
     f0 = float(model.omega[case.mode - 1]) / (2 * math.pi)
     lo, hi = args.range if args.range is not None else (0.9 * f0, 1.05 * f0)
@@ -199,18 +242,21 @@ def _run_case(args) -> int:
     observe = np.asarray(model.basis[case.response_dof], dtype=float)
     curves = []
     t0 = time.perf_counter()
-    for F in args.force:
-        curves.append(_curve(model, law, F, F * case.load(), (lo, hi), settings, observe))
+    for F in amplitudes:
+        curves.append(_curve(model, law, F, F * load, (lo, hi), settings, observe, key))
     elapsed = time.perf_counter() - t0
     head = {"case": case.name, "mode": case.mode, "path": args.path,
             "stuck_frequency_hz": f0, "drive_dof": case.drive_dof,
             "response_dof": case.response_dof, "harmonics": list(settings.harmonics),
-            "n_time": args.n_time}
+            "n_time": args.n_time, **drive}
+    if drive:
+        del head["drive_dof"]                   # a base drive has no drive point
     if args.json:
         print_json({"model": head, "curves": curves, "elapsed_s": elapsed})
         return 0
-    print(f"{case.name}, mode {case.mode} (stuck {f0:.5g} Hz): driven and observed at DOF "
-          f"{case.response_dof}, joints: {args.path}; harmonics {list(settings.harmonics)}, "
-          f"{args.n_time} samples; {elapsed:.1f} s")
+    how = (f"driven by its base, observed at DOF {case.response_dof} relative to the base"
+           if drive else f"driven and observed at DOF {case.response_dof}")
+    print(f"{case.name}, mode {case.mode} (stuck {f0:.5g} Hz): {how}, joints: {args.path}; "
+          f"harmonics {list(settings.harmonics)}, {args.n_time} samples; {elapsed:.1f} s")
     _print_curves(curves)
     return 0
