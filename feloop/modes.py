@@ -264,7 +264,8 @@ def fit_modes(series: list) -> ModesFit:
                 mask=s.mask, fallback=alone[s.label][0].values)
             start.update({nuisance_name(n, s.label): own[n] for n in MODE_NUISANCE})
         starts.append(start)
-    best, _, _ = fit_base(problem, starts, free)
+    # the reference's optimum first; the others only when that fit fails or stops short
+    best, _, _ = fit_base(problem, starts, free, only=[0])
     out = ModesFit(series, problem, best, names)
     for s, sl in zip(series, _slices(series)):
         only = np.zeros(problem.omega2.size, bool)
