@@ -23,8 +23,8 @@ function (:func:`fe.hb_exact.continuation_exact`); both identified by LSCF as ab
 
 ``python -m cases.stepped_sine_test CASE.toml OUT.csv SEED [MODES] [--top-slip X]``
 writes the table (``x_source = simulated``; the seeded chi only printed) and prints the
-truth; ``MODES`` (e.g. ``1,2``): those bending modes, one table, each with the noise of
-seed ``SEED + 100 mode``. SI units.
+truth; ``MODES`` (e.g. ``1,2``): those bending modes of one joint (one seeded chi), one
+table, each with the noise of seed ``SEED + 100 mode``. SI units.
 """
 from __future__ import annotations
 
@@ -77,12 +77,14 @@ def _receptance(nc, red, load, lines, force):
     return np.array(rec), "; ".join(words) or "none"
 
 
-def simulate(case, seed: int, mode: int | None = None,
-             top_slip: float | None = None) -> tuple[MeasuredData, dict]:
+def simulate(case, seed: int, mode: int | None = None, top_slip: float | None = None,
+             noise_seed: int | None = None) -> tuple[MeasuredData, dict]:
     """(table, truth) of :class:`cases.case.Case` ``case`` (a case file with joints and
     ``[measured] mode``, or the bending mode ``mode``) for ``seed`` (module docstring;
     ``top_slip``: the top level's linear slip in slip scales, default
-    :data:`TOP_SLIP` or :data:`TOP_SLIP_OTHER`)."""
+    :data:`TOP_SLIP` or :data:`TOP_SLIP_OTHER`; ``noise_seed``: the run order and the
+    noise from this seed instead, the seeded chi from ``seed``: several modes of one
+    joint)."""
     from casefile.nonlinear import file_law, nonlinear_case
 
     rng = np.random.default_rng(seed)
@@ -90,6 +92,8 @@ def simulate(case, seed: int, mode: int | None = None,
 
     iwan = file_law(cf) == "iwan4"
     chi = float(rng.uniform(*CHI_RANGE)) if iwan else None
+    if noise_seed is not None:
+        rng = np.random.default_rng(noise_seed)
     if iwan:
         cf = dataclasses.replace(cf, interfaces=tuple(
             dataclasses.replace(i, chi=chi) if i.tangential == "joint" else i
@@ -155,9 +159,10 @@ def main(argv=None) -> int:
     try:
         if len(args) < 4:
             data, truth = simulate(resolve_case(case_file), int(seed), top_slip=top)
-        else:      # several bending modes, each with its own noise (seed + 100 mode)
-            parts = [simulate(resolve_case(case_file), int(seed) + 100 * m, mode=m,
-                              top_slip=top) for m in (int(t) for t in args[3].split(","))]
+        else:      # several bending modes of one joint, each its noise (seed + 100 mode)
+            parts = [simulate(resolve_case(case_file), int(seed), mode=m, top_slip=top,
+                              noise_seed=int(seed) + 100 * m)
+                     for m in (int(t) for t in args[3].split(","))]
             data = MeasuredData.concatenate([d for d, _ in parts])
             truth = [t for _, t in parts]
     except ValueError as exc:       # a bad file, a base drive: one line, status 2

@@ -19,8 +19,10 @@ stiffness scales (reported, ``stiffness_scale``).
   :func:`feloop.select.fe_noise`), from starts made by the reference mode's own base fit;
   the per-mode fit tests (chi2 of each mode's levels against its residual count), and the
   one-joint test: every mode fitted alone (its own joint) against the one joint,
-  ``D = chi2(one joint) - sum chi2(alone)`` against chi2 with ``(M - 1) k`` degrees of
-  freedom (``k`` joint parameters, ``M`` modes; a likelihood-ratio test).
+  ``D = chi2(one joint) - sum chi2(alone)`` against chi2 with ``q = (M - 1) k`` degrees
+  of freedom (``k`` joint parameters, ``M`` modes; a likelihood-ratio test), or ``D / q``
+  against ``F(q, nu)`` when the noise's repeatability is estimated (``nu`` its degrees
+  of freedom, the fewest of the modes'), as the judge's fit test.
 * :func:`feloop.mode_prediction.predict_mode` (``loop --fit-modes 2 --predict-modes 1``): a mode the fit never
   saw, predicted at every level from the fitted joint; its ``zeta_v@m`` and ``f0_hz@m``
   are *calibrated* to its lowest level (two numbers from two measured ones), so what is
@@ -45,10 +47,12 @@ from scipy import stats
 from feloop.levels import FELevels
 from feloop.select import fe_noise, fit_base
 from feloop.starts import base_parameters
+from inverse.decrement import central_jacobian
+from inverse.judge.selection import effective_dof, fit_test
 from inverse.update import Fit, NoiseModel, Parameter, UpdateProblem, fit
 
 __all__ = ["MODE_NUISANCE", "ModeSeries", "ModeSet", "ModesFit", "mode_series",
-           "nuisance_name", "fit_modes", "calibrate"]
+           "nuisance_name", "fit_modes", "calibrate", "covariance_at"]
 
 #: The parameters each mode keeps of its own (module docstring).
 MODE_NUISANCE = ("zeta_v", "f0_hz")
@@ -72,11 +76,12 @@ class ModeSeries:
     mask: np.ndarray
     fe: FELevels
     noise: NoiseModel = None
+    judge_noise: object = None
 
     def __post_init__(self):
         self.mask = np.asarray(self.mask, dtype=bool)
         if self.noise is None:
-            self.noise = fe_noise(self.data)[1]
+            self.judge_noise, self.noise = fe_noise(self.data)
 
 
 def mode_series(data_by_mode: dict, masks: dict, levels) -> list[ModeSeries]:
@@ -196,10 +201,14 @@ class ModesFit:
         return {k: v for k, v in j.items() if k not in ("params", "linear")}
 
 
-def _chi2_test(chi2: float, n: int) -> dict:
-    p = float(stats.chi2.sf(chi2, n)) if n > 0 else math.nan
-    return {"chi2": float(chi2), "residuals": int(n), "p_value": p,
-            "passes": bool(not (p < TEST_SIZE))}
+def _mode_test(chi2: float, n: int, k: int, jn) -> dict:
+    """The judge's fit test (:func:`inverse.judge.selection.fit_test`: chi-square with a
+    known noise, F with an estimated repeatability) of one mode's ``n`` residuals under
+    the ``k`` parameters that shape them (the joint's and its own two)."""
+    t = fit_test(chi2, n, k, jn)
+    return {"chi2": float(chi2), "residuals": int(n), "parameters": int(k),
+            "p_value": t.p_value, "test": t.test,
+            "passes": bool(t.p_value is None or t.p_value >= TEST_SIZE)}
 
 
 def _alone(s: ModeSeries) -> tuple[Fit, dict, list, dict]:
@@ -266,20 +275,58 @@ def fit_modes(series: list) -> ModesFit:
         starts.append(start)
     # the reference's optimum first; the others only when that fit fails or stops short
     best, _, _ = fit_base(problem, starts, free, only=[0])
+    best.cov = covariance_at(problem, best)
     out = ModesFit(series, problem, best, names)
     for s, sl in zip(series, _slices(series)):
         only = np.zeros(problem.omega2.size, bool)
         only[sl] = s.mask
         r = problem.residuals(best.values, mask=only)
-        out.per_mode[s.label] = _chi2_test(float(r @ r), r.size)
+        out.per_mode[s.label] = _mode_test(float(r @ r), r.size,
+                                           len(names) + len(MODE_NUISANCE), s.judge_noise)
     out.alone = {lb: a[0] for lb, a in alone.items()}
     out.alone_joint = {lb: a[3] for lb, a in alone.items()}
     D = best.chi2 - sum(f.chi2 for f in out.alone.values())
     dof = (len(series) - 1) * len(names)
-    p = float(stats.chi2.sf(max(D, 0.0), dof)) if dof > 0 else math.nan
-    out.one_joint = {"D": float(D), "dof": dof, "p_value": p,
+    nu = min(effective_dof(s.judge_noise) for s in series)
+    if dof == 0:
+        p, test = math.nan, "none (one mode)"
+    elif math.isinf(nu):
+        p, test = float(stats.chi2.sf(max(D, 0.0), dof)), f"chi-square, {dof} dof"
+    else:           # the noise's repeatability estimated: F, as the judge's fit test
+        p, test = float(stats.f.sf(max(D, 0.0) / dof, dof, nu)), f"F({dof}, {nu:.3g})"
+    out.one_joint = {"D": float(D), "dof": dof, "p_value": p, "test": test,
                      "passes": bool(not (p < TEST_SIZE))}
     return out
+
+
+def covariance_at(problem: UpdateProblem, f: Fit) -> np.ndarray | None:
+    """``(J^T J)^-1`` of fit ``f`` from a central-difference Jacobian of step
+    :data:`inverse.decrement.CHECK_STEP` parameter steps (parameters at a bound held:
+    zero rows and columns). The optimizer's own Jacobian is taken at steps of 1e-6 steps
+    about where it stopped: a fit started at its optimum (the joint fit here starts at the
+    reference's) stops there, and at that step the balance's round-off made ``J^T J``
+    singular (a zero-width interval of ``ln_dc1``) under one BLAS kernel and not another."""
+    P = [problem.parameters[n] for n in f.free]
+    step = np.array([p.step for p in P])
+    x = np.array([f.values[n] for n in f.free])
+    lo = np.array([(p.lower - v) / s for p, v, s in zip(P, x, step)])
+    hi = np.array([(p.upper - v) / s for p, v, s in zip(P, x, step)])
+
+    def funs(us):
+        return problem.residuals_many([{**f.values, **dict(zip(f.free, x + step * u))}
+                                       for u in us])
+
+    u = np.zeros(x.size)
+    J, _ = central_jacobian(funs, u, problem.residuals(f.values), lo, hi)
+    held = np.array([bool(f.at_bound.get(n)) for n in f.free])
+    keep = np.flatnonzero(~held)
+    cov = np.zeros((x.size, x.size))
+    Js = J[:, keep] / step[keep]
+    try:
+        cov[np.ix_(keep, keep)] = np.linalg.inv(Js.T @ Js)
+    except np.linalg.LinAlgError:
+        return None
+    return cov
 
 
 def calibrate(s: ModeSeries, joint: dict, names: tuple, mask=None, fallback=None) -> dict:

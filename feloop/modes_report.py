@@ -40,13 +40,13 @@ def _one_joint_words(mf) -> str:
     modes = ", ".join(map(str, labels))
     if t["passes"]:
         return (f"one joint explains modes {modes}: each mode fitted alone lowers chi2 by "
-                f"D = {t['D']:.3g} together, {t['dof']} degree(s) of freedom (p = "
-                f"{t['p_value']:.3g} >= {TEST_SIZE:g})")
+                f"D = {t['D']:.3g} together, {t['dof']} degree(s) of freedom ({t['test']}, "
+                f"p = {t['p_value']:.2g} >= {TEST_SIZE:g})")
     alone = "; ".join(f"mode {lb} alone: F_S = {j['F_S']:.4g} N, slip scale "
                       f"{j['slip_scale']:.4g} m" for lb, j in mf.alone_joint.items())
     return (f"the modes disagree on the joint: one joint for modes {modes} costs D = "
             f"{t['D']:.3g} in chi2 over each mode fitted alone ({t['dof']} degree(s) of "
-            f"freedom, p = {t['p_value']:.2g} < {TEST_SIZE:g}); {alone}. A joint law or "
+            f"freedom, {t['test']}, p = {t['p_value']:.2g} < {TEST_SIZE:g}); {alone}. A joint law or "
             "distribution over the interface that the modes load differently, or a second "
             "joint that one mode works: unexplained (no mode-dependent cause is tested at the "
             "FE level)")
@@ -97,6 +97,12 @@ def summary(r: dict) -> dict:
     lines = ([_one_joint_words(mf)] if mf.one_joint["dof"] else []) \
         + [v["verdict"] for v in predicted.values()]
     f = mf.fit
+    for lb, t in mf.per_mode.items():
+        if not t["passes"]:
+            lines.insert(0, f"mode {lb}'s fit levels are not fitted within their noise (chi2 "
+                            f"{t['chi2']:.3g} over {t['residuals']} residuals, {t['test']}, "
+                            f"p = {t['p_value']:.2g}): the joint model misfits a mode it was "
+                            "fitted to, and what is predicted from it rests on that fit")
     if not (f.success and f.converged):
         lines.insert(0, f"the joint fit did NOT converge (decrement {f.decrement:.3g}, "
                         f"{f.message})")
@@ -133,7 +139,7 @@ def format_text(s: dict) -> str:
                f"{s['force_scale']['value']:g} N/unit assumed)")
     for lb, m in s["per_mode"].items():
         out.append(f"  mode {lb} (FE mode {m['fe_mode']}): chi2 {m['chi2']:.3g} over "
-                   f"{m['residuals']} residuals, p = {m['p_value']:.3g} "
+                   f"{m['residuals']} residuals, {m['test']}, p = {m['p_value']:.2g} "
                    f"({'passes' if m['passes'] else 'FAILS'}); alone: chi2 "
                    f"{m['alone']['chi2']:.3g}, F_S {m['alone']['joint']['F_S']:.4g} N")
     for lb, p in s["predicted"].items():
