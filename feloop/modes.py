@@ -175,9 +175,9 @@ class ModesFit:
     """The one-joint fit over several modes (:func:`fit_modes`): the ``fit``
     (:class:`inverse.update.Fit`, joint and per-mode nuisance parameters), its
     ``problem``, the joint parameter ``names``, per mode its fit test (``per_mode``:
-    label -> chi2, residuals, p-value, passes), each mode fitted alone (``alone``: label ->
-    Fit of the mode's own base model; ``alone_joint``: its physical joint), and the one-joint test (``one_joint``: D, dof,
-    p-value, passes)."""
+    label -> chi2, residuals, test, p-value, passes), each mode fitted alone (``alone``:
+    label -> Fit of the mode's own base model; ``alone_joint``: its physical joint), and
+    the one-joint test (``one_joint``: D, dof, test, p-value, passes)."""
 
     series: list
     problem: UpdateProblem

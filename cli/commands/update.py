@@ -88,9 +88,14 @@ def run_modes(args, fit_modes, predict_modes=()) -> int:
     r = run(fit_modes=fit_modes, predict_modes=predict_modes, data_path=args.data,
             fit_levels=getattr(args, "fit_levels", None), force_scale=args.force_scale,
             rig_repeatability=rig_from_args(args))
+    return _report(args, r, write_modes, summary, format_text)
+
+
+def _report(args, result, write, summary, format_text) -> int:
+    """Write ``result`` into ``--out`` (``write``), print its JSON or its text."""
     if args.out:
-        write_modes(r, args.out)
-    s = summary(r)
+        write(result, args.out)
+    s = summary(result)
     if args.json:
         print_json(s)
     else:
@@ -117,13 +122,4 @@ def run(args) -> int:
                     force_scale=args.force_scale, profiles=args.profiles,
                     assumptions=args.assumptions,
                     rig_repeatability=rig_from_args(args))
-    if args.out:
-        write_update(result, args.out)
-    s = summary(result)
-    if args.json:
-        print_json(s)
-    else:
-        print(format_text(s))
-        if args.out:
-            print(f"report: {Path(args.out) / 'report.md'}")
-    return 0
+    return _report(args, result, write_update, summary, format_text)
