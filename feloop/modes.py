@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from feloop.levels import FELevels
+from feloop.levels import FELevels, Simulator
 from feloop.select import fe_noise, fit_base
 from feloop.starts import base_parameters
 from inverse.decrement import central_jacobian
@@ -218,36 +218,18 @@ def _alone(s: ModeSeries) -> tuple[Fit, dict, list, dict]:
     solo.joint_source = None
     solo.reset()
     P, starts = base_parameters(s.data, s.mask, solo)
-    problem = UpdateProblem(_Solo(solo), s.data.omega2, s.data.zeta, s.noise, s.mask, P)
+    problem = UpdateProblem(Simulator(solo), s.data.omega2, s.data.zeta, s.noise, s.mask, P)
     best, _, _ = fit_base(problem, starts, solo.base_parameters)
     joint = {k: v for k, v in solo.joint(best.values).items() if k not in ("params", "linear")}
     return best, P, starts, joint
 
 
-@dataclass
-class _Solo:
-    """``simulate`` of one mode's base model (picklable)."""
-
-    fe: FELevels
-
-    def __call__(self, values):
-        p = self.fe.predict(values)
-        return p.omega2, p.zeta
-
-    def batch(self, values, warm=None):
-        preds, after = self.fe.predict_batch(values, None, warm)
-        return [p if isinstance(p, Exception) else (p.omega2, p.zeta) for p in preds], after
-
-    def reset(self):
-        self.fe.reset()
-
-
 def fit_modes(series: list) -> ModesFit:
     """One joint fitted to the fit levels of every mode of ``series`` (the first the
     reference; module docstring). Every mode is first fitted alone (its base model); the
-    joint fit starts from the reference's optimum and from the reference's other starts,
-    each with every other mode's nuisance parameters calibrated to its own levels under
-    that joint."""
+    joint fit starts from the reference's optimum (and, when that fit fails or does not
+    converge, from the reference's other starts too), each with every other mode's
+    nuisance parameters calibrated to its own levels under that joint."""
     ref = series[0]
     names = tuple(ref.fe.form.names)
     alone = {s.label: _alone(s) for s in series}
@@ -262,19 +244,20 @@ def fit_modes(series: list) -> ModesFit:
                 f"{p.description} (mode {s.label})")
     problem = _stacked(series, ModeSet(series, names), P)
     free = names + tuple(nuisance_name(n, s.label) for s in series for n in MODE_NUISANCE)
-    joint_starts = [alone[ref.label][0].values] + [
-        {**alone[ref.label][0].values, **st} for st in alone[ref.label][2]]
-    starts = []
-    for js in joint_starts:
+    def start_of(js: dict) -> dict:
         start = {n: js[n] for n in names if n in js}
         for s in series:
             own = alone[s.label][0].values if s is ref else calibrate(
                 s, {**start, **{k: v for k, v in js.items() if k == "log10_kt"}}, names,
                 mask=s.mask, fallback=alone[s.label][0].values)
             start.update({nuisance_name(n, s.label): own[n] for n in MODE_NUISANCE})
-        starts.append(start)
-    # the reference's optimum first; the others only when that fit fails or stops short
-    best, _, _ = fit_base(problem, starts, free, only=[0])
+        return start
+
+    first = alone[ref.label][0].values
+    best, _, _ = fit_base(problem, [start_of(first)], free)
+    if not (best.success and best.converged):      # the reference's other starts too
+        best, _, _ = fit_base(problem, [start_of(first)] + [
+            start_of({**first, **st}) for st in alone[ref.label][2]], free)
     best.cov = covariance_at(problem, best)
     out = ModesFit(series, problem, best, names)
     for s, sl in zip(series, _slices(series)):
