@@ -23,7 +23,7 @@ def test_every_shipped_case_has_a_face():
     # joint parameters to be fitted, the study's nonlinear model takes chi, R~ of its levels)
     assert set(resolve_case("double-beam").capabilities) == {
         "fe_model", "summary", "calibrated_file", "measured_data", "nonlinear_model",
-        "update", "fe_levels", "fe_check", "uncertainty", "fe_uncertainty"}
+        "update", "update_modes", "fe_levels", "fe_check", "uncertainty", "fe_uncertainty"}
     with pytest.raises(InputError, match="case 'lumped' has no FE strip model"):
         resolve_case("lumped").require("fe_model")
 
